@@ -1,0 +1,195 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// zdenoise: a denoiser for Monte Carlo path-traced images after Zhdanov,
+// Ershov & Voloboy (2018). The public API follows OpenImageIO's
+// ImageBufAlgo conventions: every operation comes in two forms,
+//
+//     bool op(ImageBuf& dst, <inputs>, ..., ROI roi = {}, int nthreads = 0);
+//     ImageBuf op(<inputs>, ..., ROI roi = {}, int nthreads = 0);
+//
+// The first writes into `dst` (allocating it as a float image shaped like the
+// first input when `dst` is uninitialized) and returns false on error, with
+// the message in `dst.geterror()`. The second returns a new image whose
+// `has_error()` is true on failure. No operation throws or exits.
+//
+// Channel convention: channels 0, 1, 2 of the radiance / quotient / albedo
+// images are R, G, B; every other channel of the first input (alpha, AOVs)
+// is copied to the output untouched. Pixel data of any type (float, half,
+// integer) are accepted; all computation is in float (accumulations in
+// double). `roi` selects the output pixels; the filter reads whatever it
+// needs around them, so filtering a ROI gives exactly the pixels a
+// whole-image run gives there. `nthreads` = 0 uses OIIO's global "threads"
+// attribute; the result is bit-identical for every thread count.
+//
+// The algorithm, with every decision the paper leaves open, is specified in
+// docs/FILTER.md.
+
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include <OpenImageIO/imagebuf.h>
+
+#include <zdenoise/export.h>
+#include <zdenoise/version.h>
+
+namespace zdenoise {
+
+using OIIO::ImageBuf;
+using OIIO::ROI;
+
+/// Every parameter of the regression filter (docs/FILTER.md section 8).
+/// The defaults are the ones the benchmark was tuned with.
+struct FilterOptions {
+    /// Smallest window half-size: the window starts at (2*r_min+1)^2 pixels.
+    int r_min = 2;
+    /// Largest window half-size (stop criterion "size").
+    int r_max = 16;
+    /// Stop criterion "quality": predicted relative noise of the fitted
+    /// value at the centre, sqrt(sum w^2 sigma^2) / sum w.
+    float eta_target = 0.02f;
+    /// Stop criterion "strong variation": a quadrant plane disagreeing with
+    /// the whole-window plane at the centre by more than
+    /// max(edge_k * (its predicted relative noise), tau_min) stops growth and
+    /// steps back to the previous radius.
+    float edge_k = 3.0f;
+    float tau_min = 0.05f;
+    /// Strength k of the value term exp(-k |z - <z>| / <z>) of the weight.
+    float value_k = 2.0f;
+    /// Points whose relative noise sigma exceeds this take no part in fits
+    /// (they still receive the filtered value).
+    float sigma_good = 1.0f;
+    /// Albedo channels below this (or non-finite) are not demodulated: the
+    /// radiance passes through unchanged there. Also the epsilon of the
+    /// demodulation L / (La + albedo_eps).
+    float albedo_eps = 1e-3f;
+    /// Depth guide: a neighbour whose inverse depth departs from the plane
+    /// extrapolated from the centre by more than this fraction is on another
+    /// surface (weight 0).
+    float depth_tolerance = 0.02f;
+    /// Normal guide: weight (n.n0)^normal_power when n.n0 > normal_cut.
+    float normal_cut = 0.5f;
+    float normal_power = 4.0f;
+    /// Exponent of the quadrant weight w_m = max(Z/Zm, Zm/Z)^quadrant_power.
+    float quadrant_power = 8.0f;
+
+    /// Optional progress report, called from the calling thread with the
+    /// fraction done in [0,1]. Not a filter parameter: it never changes the
+    /// result.
+    std::function<void(float)> progress;
+};
+
+/// Optional guide images for the filter. Each must have the radiance's
+/// data window; a null pointer means "not given".
+struct Guides {
+    /// Shading normal, 3 channels (any space consistent across the image;
+    /// need not be unit length: it is normalised).
+    const ImageBuf* normal = nullptr;
+    /// Distance or planar depth along the camera ray, channel 0. Values <= 0,
+    /// >= 1e9 or non-finite mean "no surface": the pixel passes through.
+    const ImageBuf* depth = nullptr;
+    /// Object identity. One channel: a plain id (equal ids weight 1, else 0).
+    /// 2k channels: k (id, coverage) pairs, e.g. Cryptomatte ranks; the
+    /// weight is the overlap sum_id min(c_p(id), c_p0(id)) of the
+    /// coverages normalised to sum 1.
+    const ImageBuf* object_id = nullptr;
+    /// Per-pixel variance of the radiance (variance of the pixel mean):
+    /// 1 channel, or one per RGB channel.
+    const ImageBuf* variance = nullptr;
+    /// Two independent half renders with radiance = (A+B)/2, RGB. Used for
+    /// the variance when `variance` is not given: Var = (A-B)^2/4.
+    const ImageBuf* half_a = nullptr;
+    const ImageBuf* half_b = nullptr;
+};
+
+/// What the filter did, for verbose output and reports.
+struct FilterStats {
+    int64_t pixels = 0;              ///< output pixels (in roi)
+    int64_t windows = 0;             ///< windows fitted (centres in roi)
+    int64_t stop_quality = 0;        ///< windows stopped by eta_target
+    int64_t stop_size = 0;           ///< windows stopped by r_max
+    int64_t stop_edge = 0;           ///< windows stopped by strong variation
+    double mean_radius = 0.0;        ///< mean final half-size of the windows
+    int64_t passthrough_pixels = 0;  ///< pixels with >= 1 RGB channel passed through
+    int64_t nonfinite_pixels = 0;    ///< pixels with a non-finite RGB value in
+                                     ///< the input (repaired or set to 0)
+};
+
+
+/// Demodulation z = L / (La + eps) per RGB channel. Channels whose albedo is
+/// below `albedo_eps` or non-finite keep the radiance unchanged, so that
+/// remodulate() inverts this exactly.
+///
+/// @param dst       Result (float when allocated here).
+/// @param radiance  Noisy radiance L; channels 0-2 are RGB, any others are
+///                  copied.
+/// @param albedo    Noise-free albedo La, channels 0-2, same data window.
+/// @param albedo_eps  Smallest albedo demodulated, also the epsilon added.
+ZDENOISE_API bool demodulate(ImageBuf& dst, const ImageBuf& radiance,
+                             const ImageBuf& albedo, float albedo_eps = 1e-3f,
+                             ROI roi = {}, int nthreads = 0);
+ZDENOISE_API ImageBuf demodulate(const ImageBuf& radiance,
+                                 const ImageBuf& albedo,
+                                 float albedo_eps = 1e-3f, ROI roi = {},
+                                 int nthreads = 0);
+
+/// Remodulation L = z * (La + eps), the exact inverse of demodulate() with
+/// the same albedo and eps (channels not demodulated pass through).
+ZDENOISE_API bool remodulate(ImageBuf& dst, const ImageBuf& quotient,
+                             const ImageBuf& albedo, float albedo_eps = 1e-3f,
+                             ROI roi = {}, int nthreads = 0);
+ZDENOISE_API ImageBuf remodulate(const ImageBuf& quotient,
+                                 const ImageBuf& albedo,
+                                 float albedo_eps = 1e-3f, ROI roi = {},
+                                 int nthreads = 0);
+
+/// The adaptive-radius five-plane regression filter with splatting,
+/// applied to a demodulated image (docs/FILTER.md sections 2-6).
+///
+/// @param dst       Filtered quotient.
+/// @param quotient  Demodulated radiance z (from demodulate()); channels 0-2
+///                  are filtered, any others copied. Its alpha channel (if
+///                  the spec names one) marks "no surface" where it is 0.
+/// @param albedo    The albedo used to demodulate: marks which channels of
+///                  which pixels were demodulated (and so are filtered), and
+///                  converts a radiance variance to the quotient's.
+/// @param guides    Optional normal, depth, object id and noise guides.
+/// @param options   Filter parameters.
+/// @param stats     If not null, filled with what the filter did.
+/// Non-finite quotient values never reach the output: a pixel with one is
+/// left out of the fits and takes the filtered value of the windows around
+/// it, or 0 where none covers it.
+ZDENOISE_API bool regression_filter(ImageBuf& dst, const ImageBuf& quotient,
+                                    const ImageBuf& albedo,
+                                    const Guides& guides = {},
+                                    const FilterOptions& options = {},
+                                    FilterStats* stats = nullptr,
+                                    ROI roi = {}, int nthreads = 0);
+ZDENOISE_API ImageBuf regression_filter(const ImageBuf& quotient,
+                                        const ImageBuf& albedo,
+                                        const Guides& guides = {},
+                                        const FilterOptions& options = {},
+                                        FilterStats* stats = nullptr,
+                                        ROI roi = {}, int nthreads = 0);
+
+/// The whole method: demodulate, regression_filter, remodulate.
+/// Parameters as for those three operations.
+ZDENOISE_API bool denoise(ImageBuf& dst, const ImageBuf& radiance,
+                          const ImageBuf& albedo, const Guides& guides = {},
+                          const FilterOptions& options = {},
+                          FilterStats* stats = nullptr, ROI roi = {},
+                          int nthreads = 0);
+ZDENOISE_API ImageBuf denoise(const ImageBuf& radiance, const ImageBuf& albedo,
+                              const Guides& guides = {},
+                              const FilterOptions& options = {},
+                              FilterStats* stats = nullptr, ROI roi = {},
+                              int nthreads = 0);
+
+/// "name=value ..." of every filter parameter, as recorded in output
+/// metadata and printed by `zdenoise -v`.
+ZDENOISE_API std::string describe(const FilterOptions& options);
+
+}  // namespace zdenoise

@@ -1,0 +1,77 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Argument checking shared by the operations.
+
+#include "internal.h"
+
+#include <OpenImageIO/imagebufalgo_util.h>
+
+namespace zdenoise {
+namespace detail {
+
+bool
+check_input(ImageBuf& dst, const ImageBuf& img, const char* opname,
+            const char* what, const ROI& roi, int minchannels)
+{
+    if (!img.initialized()) {
+        dst.errorfmt("{}: {} image is not initialized", opname, what);
+        return false;
+    }
+    if (img.has_error()) {
+        dst.errorfmt("{}: {} image: {}", opname, what, img.geterror(false));
+        return false;
+    }
+    const OIIO::ImageSpec& spec = img.spec();
+    if (spec.deep) {
+        dst.errorfmt("{}: {} image is deep; deep images are not supported",
+                     opname, what);
+        return false;
+    }
+    if (spec.depth > 1) {
+        dst.errorfmt("{}: {} image is a volume; only 2D images are supported",
+                     opname, what);
+        return false;
+    }
+    if (spec.nchannels < minchannels) {
+        dst.errorfmt("{}: {} image has {} channel(s), needs at least {}",
+                     opname, what, spec.nchannels, minchannels);
+        return false;
+    }
+    ROI need(roi.xbegin, roi.xend, roi.ybegin, roi.yend);
+    ROI have = img.roi();
+    have.chbegin = need.chbegin;
+    have.chend   = need.chend;
+    if (OIIO::roi_intersection(need, have) != need) {
+        dst.errorfmt("{}: {} image's data window {}x{}{:+d}{:+d} does not "
+                     "cover the pixels {}x{}{:+d}{:+d} being computed",
+                     opname, what, have.width(), have.height(), have.xbegin,
+                     have.ybegin, need.width(), need.height(), need.xbegin,
+                     need.ybegin);
+        return false;
+    }
+    return true;
+}
+
+
+bool
+prepare_dst(ImageBuf& dst, const ImageBuf& src, ROI& roi, const char* opname)
+{
+    if (!src.initialized()) {
+        dst.errorfmt("{}: input image is not initialized", opname);
+        return false;
+    }
+    if (!OIIO::ImageBufAlgo::IBAprep(roi, &dst, &src,
+                                     OIIO::ImageBufAlgo::IBAprep_DST_FLOAT_PIXELS
+                                         | OIIO::ImageBufAlgo::IBAprep_NO_SUPPORT_VOLUME))
+        return false;
+    if (dst.nchannels() != src.nchannels()) {
+        dst.errorfmt("{}: destination has {} channels, input has {}", opname,
+                     dst.nchannels(), src.nchannels());
+        return false;
+    }
+    return true;
+}
+
+}  // namespace detail
+}  // namespace zdenoise

@@ -1,0 +1,194 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+
+#include "channel_spec.h"
+
+#include <OpenImageIO/strutil.h>
+
+namespace zdenoise {
+namespace cli {
+
+using OIIO::Strutil::fmt::format;
+
+namespace {
+
+/// Component names tried for a role, in order of preference; each entry is
+/// one complete naming (e.g. R,G,B or X,Y,Z).
+std::vector<std::vector<std::string>>
+role_components(Role role)
+{
+    switch (role) {
+    case Role::Radiance:
+    case Role::Albedo: return { { "R", "G", "B" }, { "r", "g", "b" } };
+    case Role::Normal:
+        return { { "X", "Y", "Z" }, { "x", "y", "z" }, { "R", "G", "B" } };
+    case Role::Depth: return { { "Z" }, { "z" }, { "V" }, { "R" }, { "Y" } };
+    case Role::ObjectId: return { { "X" }, { "x" }, { "R" }, { "V" }, { "Y" } };
+    case Role::Variance:
+        return { { "R", "G", "B" }, { "r", "g", "b" }, { "V" }, { "Y" } };
+    }
+    return {};
+}
+
+/// The index of the channel called `want`, or the unique channel ending in
+/// "." + want; -1 if none, -2 if ambiguous.
+int
+find_channel(const std::vector<std::string>& names, const std::string& want)
+{
+    int found = -1;
+    for (size_t i = 0; i < names.size(); ++i)
+        if (names[i] == want)
+            return int(i);
+    for (size_t i = 0; i < names.size(); ++i)
+        if (OIIO::Strutil::ends_with(names[i], "." + want)) {
+            if (found >= 0)
+                return -2;
+            found = int(i);
+        }
+    return found;
+}
+
+bool
+count_fits(Role role, size_t n)
+{
+    switch (role) {
+    case Role::Radiance: return n == 3 || n == 4;
+    case Role::Albedo:
+    case Role::Normal: return n == 3;
+    case Role::Depth: return n == 1;
+    case Role::Variance: return n == 1 || n == 3;
+    case Role::ObjectId: return n == 1 || (n >= 2 && n % 2 == 0);
+    }
+    return false;
+}
+
+const char*
+count_wanted(Role role)
+{
+    switch (role) {
+    case Role::Radiance: return "3 (R,G,B) or 4 (R,G,B,A)";
+    case Role::Albedo:
+    case Role::Normal: return "3";
+    case Role::Depth: return "1";
+    case Role::Variance: return "1 or 3";
+    case Role::ObjectId: return "1, or (id, coverage) pairs";
+    }
+    return "";
+}
+
+/// Try one naming of the role's components, with an optional layer prefix.
+bool
+try_components(const std::vector<std::string>& names, const std::string& layer,
+               const std::vector<std::string>& comps, std::vector<int>& idx)
+{
+    idx.clear();
+    for (const std::string& c : comps) {
+        int i = find_channel(names, layer.empty() ? c : layer + "." + c);
+        if (i < 0)
+            return false;
+        idx.push_back(i);
+    }
+    return true;
+}
+
+}  // namespace
+
+
+const char*
+role_name(Role role)
+{
+    switch (role) {
+    case Role::Radiance: return "radiance";
+    case Role::Albedo: return "albedo";
+    case Role::Normal: return "normal";
+    case Role::Depth: return "depth";
+    case Role::ObjectId: return "object id";
+    case Role::Variance: return "variance";
+    }
+    return "?";
+}
+
+
+bool
+select_channels(const std::vector<std::string>& names, const std::string& selection,
+                Role role, std::vector<int>& indices, std::string& error)
+{
+    indices.clear();
+    std::vector<std::string> parts = OIIO::Strutil::splits(selection, ",");
+    for (std::string& p : parts)
+        p = OIIO::Strutil::strip(p);
+
+    if (parts.size() > 1) {
+        // Explicit channel names.
+        for (const std::string& p : parts) {
+            int i = find_channel(names, p);
+            if (i == -2) {
+                error = format("channel '{}' is ambiguous", p);
+                return false;
+            }
+            if (i < 0) {
+                error = format("no channel '{}'", p);
+                return false;
+            }
+            indices.push_back(i);
+        }
+        if (!count_fits(role, indices.size())) {
+            error = format("{} channels given for the {}; it needs {}",
+                           indices.size(), role_name(role), count_wanted(role));
+            return false;
+        }
+        return true;
+    }
+
+    // A layer name, or the role's plain names when empty. A single channel
+    // name is accepted for one-channel roles.
+    const std::string layer = parts.empty() ? std::string() : parts[0];
+    for (const auto& comps : role_components(role)) {
+        if (try_components(names, layer, comps, indices)) {
+            if (role == Role::Radiance) {
+                int a = find_channel(names, layer.empty() ? "A" : layer + ".A");
+                if (a >= 0)
+                    indices.push_back(a);
+            }
+            return true;
+        }
+    }
+    if (!layer.empty() && (role == Role::Depth || role == Role::ObjectId
+                           || role == Role::Variance)) {
+        int i = find_channel(names, layer);
+        if (i >= 0) {
+            indices = { i };
+            return true;
+        }
+    }
+    std::string wanted;
+    for (const std::string& c : role_components(role).front())
+        wanted += (wanted.empty() ? "" : ",")
+                  + (layer.empty() ? c : layer + "." + c);
+    error = layer.empty()
+                ? format("no {} channels {} (choose them with :ch=)",
+                         role_name(role), wanted)
+                : format("no channels {} for the {} layer '{}'", wanted,
+                         role_name(role), layer);
+    return false;
+}
+
+
+bool
+cycles_prefix(const std::vector<std::string>& names, std::string& prefix)
+{
+    for (const std::string& n : names) {
+        if (n == "Combined.R") {
+            prefix.clear();
+            return true;
+        }
+        if (OIIO::Strutil::ends_with(n, ".Combined.R")) {
+            prefix = n.substr(0, n.size() - std::string("Combined.R").size());
+            return true;
+        }
+    }
+    return false;
+}
+
+}  // namespace cli
+}  // namespace zdenoise

@@ -1,0 +1,105 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// The per-pixel planes the regression filter works on: the quotient, its
+// pixel classes, noise estimate and guides, decoded once into contiguous
+// float arrays over a region (the output ROI plus the filter's halo).
+
+#pragma once
+
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include <zdenoise/zdenoise.h>
+
+namespace zdenoise {
+namespace detail {
+
+/// Pixel class bits (docs/FILTER.md section 2).
+enum PixelClass : uint8_t {
+    kSurface    = 1 << 0,  ///< alpha > 0 and a valid depth
+    kFitPoint   = 1 << 1,  ///< surface, demodulated and finite in R, G, B
+    kReceiveR   = 1 << 2,  ///< surface and demodulated in R (then G, B)
+    kReceiveAny = 7 << 2,
+    kNonFinite  = 1 << 5,  ///< some RGB quotient value is NaN or Inf
+};
+
+/// Bitwise id comparison: Cryptomatte ids are float bit patterns that may
+/// be NaN, and plain ids compare equal exactly.
+inline bool
+same_id(float a, float b)
+{
+    uint32_t ia, ib;
+    std::memcpy(&ia, &a, 4);
+    std::memcpy(&ib, &b, 4);
+    return ia == ib;
+}
+
+/// The decoded filter input over `region` (row-major, `width` pixels a row).
+struct FilterInputs {
+    ROI region;          ///< pixels held (within the image's data window)
+    ROI image;           ///< the image's whole data window
+    int width = 0, height = 0;
+
+    std::vector<float> z;      ///< RGB quotient, 3 per pixel
+    std::vector<float> zl;     ///< luminance of z (fit points)
+    std::vector<uint8_t> cls;  ///< PixelClass bits
+    std::vector<float> sigma;  ///< relative noise of zl (fit points)
+    std::vector<float> vs;     ///< smoothed variance of zl (fit points)
+
+    // Guides (empty when not given).
+    std::vector<float> normal;    ///< unit normal, 3 per pixel; 0 = none
+    std::vector<float> invdepth;  ///< 1/depth on surface pixels
+    int id_pairs = 0;             ///< 0: no id, -1: plain id, k: k pairs
+    std::vector<float> ids;       ///< plain: 1/pixel; pairs: 2k/pixel
+                                  ///< (id, normalised coverage)
+
+    size_t index(int x, int y) const
+    {
+        return size_t(y - region.ybegin) * size_t(width)
+               + size_t(x - region.xbegin);
+    }
+    bool in_region(int x, int y) const
+    {
+        return x >= region.xbegin && x < region.xend && y >= region.ybegin
+               && y < region.yend;
+    }
+};
+
+/// Decode the quotient, albedo and guides over `region` and estimate the
+/// noise (docs/FILTER.md sections 2-3). Guides must have been checked to
+/// cover the region. Returns false (message in dst) on bad guide shapes.
+bool
+decode_filter_inputs(FilterInputs& in, ImageBuf& dst, const ImageBuf& quotient,
+                     const ImageBuf& albedo, const Guides& guides,
+                     const FilterOptions& opt, ROI region, int nthreads);
+
+/// The guide weight g(q; p0) of docs/FILTER.md section 4, with what depends
+/// on the centre alone computed once per centre.
+class GuideWeight {
+public:
+    GuideWeight(const FilterInputs& in, const FilterOptions& opt)
+        : m_in(in)
+        , m_cut(opt.normal_cut)
+        , m_power(opt.normal_power)
+        , m_depth_tol(opt.depth_tolerance)
+    {
+    }
+
+    /// Set the centre p0.
+    void centre(int x0, int y0);
+
+    /// g(q; p0) for a surface pixel q = (x, y).
+    float operator()(int x, int y) const;
+
+private:
+    const FilterInputs& m_in;
+    float m_cut, m_power, m_depth_tol;
+    int m_x0 = 0, m_y0 = 0;
+    size_t m_i0 = 0;
+    float m_zeta0 = 0, m_gx = 0, m_gy = 0;
+};
+
+}  // namespace detail
+}  // namespace zdenoise

@@ -1,0 +1,44 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Helpers shared by the operations of libzdenoise (not installed).
+
+#pragma once
+
+#include <cmath>
+
+#include <OpenImageIO/imagebuf.h>
+
+namespace zdenoise {
+namespace detail {
+
+using OIIO::ImageBuf;
+using OIIO::ROI;
+
+/// Rec.709 luminance weights: the scalar view of an RGB quotient.
+constexpr float kLumaWeights[3] = { 0.2126f, 0.7152f, 0.0722f };
+
+/// Is an albedo channel value demodulated (docs/FILTER.md section 1)?
+/// The single definition used by demodulate, the filter and remodulate, so
+/// that the three agree pixel for pixel.
+inline bool
+albedo_demodulated(float albedo, float albedo_eps)
+{
+    return std::isfinite(albedo) && albedo >= albedo_eps;
+}
+
+/// Check that `img` is a usable input of operation `opname`: initialized,
+/// not deep, 2D, at least `minchannels` channels, and its data window holds
+/// `roi` (all but the channel range). On failure the message names the
+/// operation and the input (`what`) and goes to dst.
+bool
+check_input(ImageBuf& dst, const ImageBuf& img, const char* opname,
+            const char* what, const ROI& roi, int minchannels);
+
+/// Make dst ready as the float result of an op whose first input is `src`
+/// and set roi (default: src's data window) to the pixels to compute.
+bool
+prepare_dst(ImageBuf& dst, const ImageBuf& src, ROI& roi, const char* opname);
+
+}  // namespace detail
+}  // namespace zdenoise

@@ -1,0 +1,119 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// demodulate() and remodulate(): division by and multiplication with the
+// albedo (docs/FILTER.md section 1). One typed loop serves both, as
+// OIIO's mul and div share imagebufalgo_muldiv.cpp.
+
+#include <zdenoise/zdenoise.h>
+
+#include <OpenImageIO/half.h>
+#include <OpenImageIO/imagebufalgo_util.h>
+
+#include "internal.h"
+
+namespace zdenoise {
+
+using namespace OIIO;
+using half = Imath::half;
+
+namespace {
+
+enum class Modulation { Divide, Multiply };
+
+template<class Dtype, class Stype, class Atype>
+bool
+modulate_(ImageBuf& dst, const ImageBuf& src, const ImageBuf& albedo,
+          float albedo_eps, Modulation mode, ROI roi, int nthreads)
+{
+    ImageBufAlgo::parallel_image(roi, paropt(nthreads), [&](ROI r) {
+        ImageBuf::Iterator<Dtype> d(dst, r);
+        ImageBuf::ConstIterator<Stype> s(src, r);
+        ImageBuf::ConstIterator<Atype> a(albedo, r);
+        for (; !d.done(); ++d, ++s, ++a) {
+            for (int c = r.chbegin; c < r.chend; ++c) {
+                float v = s[c];
+                if (c < 3) {
+                    const float alb = a[c];
+                    if (detail::albedo_demodulated(alb, albedo_eps))
+                        v = mode == Modulation::Divide
+                                ? v / (alb + albedo_eps)
+                                : v * (alb + albedo_eps);
+                }
+                d[c] = v;
+            }
+        }
+    });
+    return true;
+}
+
+
+bool
+modulate(ImageBuf& dst, const ImageBuf& src, const ImageBuf& albedo,
+         float albedo_eps, Modulation mode, ROI roi, int nthreads)
+{
+    const char* opname = mode == Modulation::Divide ? "demodulate"
+                                                    : "remodulate";
+    if (!detail::prepare_dst(dst, src, roi, opname))
+        return false;
+    const char* what = mode == Modulation::Divide ? "radiance" : "quotient";
+    if (!detail::check_input(dst, src, opname, what, roi, 3)
+        || !detail::check_input(dst, albedo, opname, "albedo", roi, 3))
+        return false;
+    if (!(albedo_eps > 0.0f) || !std::isfinite(albedo_eps)) {
+        dst.errorfmt("{}: albedo_eps must be a positive number, got {}",
+                     opname, albedo_eps);
+        return false;
+    }
+    bool ok = false;
+    OIIO_DISPATCH_COMMON_TYPES3(ok, opname, modulate_, dst.spec().format,
+                                src.spec().format, albedo.spec().format, dst,
+                                src, albedo, albedo_eps, mode, roi, nthreads);
+    return ok;
+}
+
+}  // namespace
+
+
+bool
+demodulate(ImageBuf& dst, const ImageBuf& radiance, const ImageBuf& albedo,
+           float albedo_eps, ROI roi, int nthreads)
+{
+    return modulate(dst, radiance, albedo, albedo_eps, Modulation::Divide, roi,
+                    nthreads);
+}
+
+
+ImageBuf
+demodulate(const ImageBuf& radiance, const ImageBuf& albedo, float albedo_eps,
+           ROI roi, int nthreads)
+{
+    ImageBuf result;
+    if (!demodulate(result, radiance, albedo, albedo_eps, roi, nthreads)
+        && !result.has_error())
+        result.errorfmt("demodulate error");
+    return result;
+}
+
+
+bool
+remodulate(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
+           float albedo_eps, ROI roi, int nthreads)
+{
+    return modulate(dst, quotient, albedo, albedo_eps, Modulation::Multiply,
+                    roi, nthreads);
+}
+
+
+ImageBuf
+remodulate(const ImageBuf& quotient, const ImageBuf& albedo, float albedo_eps,
+           ROI roi, int nthreads)
+{
+    ImageBuf result;
+    if (!remodulate(result, quotient, albedo, albedo_eps, roi, nthreads)
+        && !result.has_error())
+        result.errorfmt("remodulate error");
+    return result;
+}
+
+}  // namespace zdenoise

@@ -1,0 +1,619 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// regression_filter(): the adaptive-radius five-plane regression with
+// splatting (docs/FILTER.md sections 5-8).
+
+#include <zdenoise/zdenoise.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <mutex>
+
+#include <OpenImageIO/imagebufalgo_util.h>
+
+#include "filter_inputs.h"
+#include "internal.h"
+
+namespace zdenoise {
+
+using namespace OIIO;
+using namespace detail;
+
+namespace {
+
+constexpr double kEps       = 1e-8;
+constexpr float kValueClamp = 30.0f;
+constexpr double kMaxWm     = 1e6;
+
+/// Weighted moments of one least-squares plane fit, in window coordinates
+/// u = dx/R, v = dy/R.
+struct FitMoments {
+    double s[6] = {};     ///< sum w {1, u, v, uu, uv, vv}
+    double t[3][3] = {};  ///< per channel: sum w z {1, u, v}
+    double n[6] = {};     ///< sum w^2 Vs {1, u, v, uu, uv, vv}
+    int count = 0;
+};
+
+/// A solved plane per channel, Z_c = c + a u + b v.
+struct Plane {
+    bool present = false;
+    double c[3] = {}, a[3] = {}, b[3] = {};
+    double var0 = 0.0;  ///< predicted variance of the luminance at p0
+
+    double at(int ch, double u, double v) const
+    {
+        return c[ch] + a[ch] * u + b[ch] * v;
+    }
+    double luminance0() const
+    {
+        return kLumaWeights[0] * c[0] + kLumaWeights[1] * c[1]
+               + kLumaWeights[2] * c[2];
+    }
+};
+
+Plane
+solve(const FitMoments& m)
+{
+    Plane p;
+    const double* s = m.s;
+    if (!(s[0] > 0.0))
+        return p;
+    p.present = true;
+    // Cofactors of the symmetric normal matrix [[s0 s1 s2][s1 s3 s4][s2 s4 s5]].
+    const double c00 = s[3] * s[5] - s[4] * s[4];
+    const double c01 = s[2] * s[4] - s[1] * s[5];
+    const double c02 = s[1] * s[4] - s[2] * s[3];
+    const double c11 = s[0] * s[5] - s[2] * s[2];
+    const double c12 = s[1] * s[2] - s[0] * s[4];
+    const double c22 = s[0] * s[3] - s[1] * s[1];
+    const double det = s[0] * c00 + s[1] * c01 + s[2] * c02;
+    if (m.count < 3 || !(det > 1e-6 * s[0] * s[0] * s[0])) {
+        for (int ch = 0; ch < 3; ++ch)
+            p.c[ch] = m.t[ch][0] / s[0];
+        p.var0 = m.n[0] / (s[0] * s[0]);
+        return p;
+    }
+    const double inv[3][3] = { { c00 / det, c01 / det, c02 / det },
+                               { c01 / det, c11 / det, c12 / det },
+                               { c02 / det, c12 / det, c22 / det } };
+    for (int ch = 0; ch < 3; ++ch) {
+        const double* t = m.t[ch];
+        p.c[ch] = inv[0][0] * t[0] + inv[0][1] * t[1] + inv[0][2] * t[2];
+        p.a[ch] = inv[1][0] * t[0] + inv[1][1] * t[1] + inv[1][2] * t[2];
+        p.b[ch] = inv[2][0] * t[0] + inv[2][1] * t[1] + inv[2][2] * t[2];
+    }
+    // Sandwich variance of the value at p0: r^T N r with r = M^-1 e0.
+    const double r[3] = { inv[0][0], inv[1][0], inv[2][0] };
+    const double* n   = m.n;
+    p.var0 = r[0] * (n[0] * r[0] + n[1] * r[1] + n[2] * r[2])
+             + r[1] * (n[1] * r[0] + n[3] * r[1] + n[4] * r[2])
+             + r[2] * (n[2] * r[0] + n[4] * r[1] + n[5] * r[2]);
+    return p;
+}
+
+
+/// The five planes of one window and what the splat needs of it.
+struct WindowFit {
+    int radius  = 0;
+    float mean  = 0.0f;  ///< <z>: mean luminance of the window's points
+    double eta  = 0.0;   ///< predicted relative noise at the centre
+    Plane whole;
+    Plane quadrant[4];
+};
+
+enum class StopReason { Quality, Size, Edge };
+
+/// Statistics of one strip, summed in strip order so that totals do not
+/// depend on the thread count.
+struct StripStats {
+    int64_t windows = 0, stop_quality = 0, stop_size = 0, stop_edge = 0;
+    int64_t radius_sum = 0;
+};
+
+
+/// Grows, fits and splats the windows of the centres of a range of rows.
+/// One per strip: holds the per-centre scratch (guide weights of the
+/// window) so that nothing is allocated per pixel.
+class WindowFitter {
+public:
+    WindowFitter(const FilterInputs& in, const FilterOptions& opt,
+                 const ROI& out, std::vector<double>& acc,
+                 std::vector<double>& wsum)
+        : m_in(in)
+        , m_opt(opt)
+        , m_out(out)
+        , m_acc(acc)
+        , m_wsum(wsum)
+        , m_guide(in, opt)
+        , m_side(2 * opt.r_max + 1)
+        , m_g(size_t(m_side) * m_side, 0.0f)
+    {
+    }
+
+    /// Fit and splat the window of fit point (x0, y0).
+    StopReason process(int x0, int y0, int& radius);
+
+private:
+    float& g_at(int dx, int dy)
+    {
+        return m_g[size_t(dy + m_opt.r_max) * m_side + (dx + m_opt.r_max)];
+    }
+    /// Extend the cached guide weights and point sums to radius R.
+    void grow_to(int R);
+    WindowFit fit(int R);
+    bool edge_fires(const WindowFit& w) const;
+    void splat(const WindowFit& w);
+
+    const FilterInputs& m_in;
+    const FilterOptions& m_opt;
+    const ROI& m_out;
+    std::vector<double>& m_acc;
+    std::vector<double>& m_wsum;
+    GuideWeight m_guide;
+    int m_side;
+    std::vector<float> m_g;  ///< g(q; p0) over the grown window
+    int m_x0 = 0, m_y0 = 0, m_grown = -1;
+    double m_zsum = 0.0;  ///< sum of zl over fit points with g > 0
+    int m_zcount  = 0;
+};
+
+
+void
+WindowFitter::grow_to(int R)
+{
+    const ROI& img = m_in.image;
+    for (int r = m_grown + 1; r <= R; ++r) {
+        // The ring at Chebyshev distance r, clipped to the image.
+        const int ya = std::max(m_y0 - r, img.ybegin);
+        const int yb = std::min(m_y0 + r, img.yend - 1);
+        for (int y = ya; y <= yb; ++y) {
+            const bool edge_row = (y == m_y0 - r || y == m_y0 + r);
+            const int step      = edge_row ? 1 : 2 * r;
+            for (int x = m_x0 - r; x <= m_x0 + r; x += std::max(step, 1)) {
+                if (x < img.xbegin || x >= img.xend)
+                    continue;
+                const size_t i = m_in.index(x, y);
+                const uint8_t cls = m_in.cls[i];
+                float g = 0.0f;
+                if (cls & kSurface)
+                    g = m_guide(x, y);
+                g_at(x - m_x0, y - m_y0) = g;
+                if (g > 0.0f && (cls & kFitPoint)) {
+                    m_zsum += m_in.zl[i];
+                    ++m_zcount;
+                }
+            }
+        }
+    }
+    m_grown = std::max(m_grown, R);
+}
+
+
+WindowFit
+WindowFitter::fit(int R)
+{
+    WindowFit wf;
+    wf.radius      = R;
+    wf.mean        = float(m_zsum / m_zcount);
+    const float m  = wf.mean;
+    const float am = std::max(std::fabs(m), float(kEps));
+    const float k  = m_opt.value_k;
+    const float inv_r2 = 1.0f / float(R * R);
+    const double inv_r = 1.0 / R;
+    const ROI& img     = m_in.image;
+    const int ya = std::max(m_y0 - R, img.ybegin);
+    const int yb = std::min(m_y0 + R, img.yend - 1);
+    const int xa = std::max(m_x0 - R, img.xbegin);
+    const int xb = std::min(m_x0 + R, img.xend - 1);
+
+    FitMoments mom[5];  // whole, then quadrants 0..3
+    double w2s2 = 0.0;
+    for (int y = ya; y <= yb; ++y) {
+        const int dy  = y - m_y0;
+        const double v = dy * inv_r;
+        size_t i       = m_in.index(xa, y);
+        for (int x = xa; x <= xb; ++x, ++i) {
+            if (!(m_in.cls[i] & kFitPoint))
+                continue;
+            const int dx  = x - m_x0;
+            const float g = g_at(dx, dy);
+            const float s = m_in.sigma[i];
+            if (!(g > 0.0f) || !(s <= m_opt.sigma_good))
+                continue;
+            const float zl = m_in.zl[i];
+            const float vt = std::min(k * std::fabs(zl - m) / am, kValueClamp);
+            const float w  = g * std::exp(-(vt + s + float(dx * dx + dy * dy) * inv_r2));
+            const double u = dx * inv_r;
+            const double wd = w;
+            const double w2v = wd * wd * m_in.vs[i];
+            w2s2 += wd * wd * double(s) * s;
+            const float* z = &m_in.z[3 * i];
+            auto add = [&](FitMoments& f) {
+                f.s[0] += wd;
+                f.s[1] += wd * u;
+                f.s[2] += wd * v;
+                f.s[3] += wd * u * u;
+                f.s[4] += wd * u * v;
+                f.s[5] += wd * v * v;
+                for (int ch = 0; ch < 3; ++ch) {
+                    const double wz = wd * z[ch];
+                    f.t[ch][0] += wz;
+                    f.t[ch][1] += wz * u;
+                    f.t[ch][2] += wz * v;
+                }
+                f.n[0] += w2v;
+                f.n[1] += w2v * u;
+                f.n[2] += w2v * v;
+                f.n[3] += w2v * u * u;
+                f.n[4] += w2v * u * v;
+                f.n[5] += w2v * v * v;
+                ++f.count;
+            };
+            add(mom[0]);
+            // Closed quadrants: a point on an axis belongs to two (four at
+            // the centre).
+            if (dx >= 0 && dy >= 0)
+                add(mom[1]);
+            if (dx <= 0 && dy >= 0)
+                add(mom[2]);
+            if (dx <= 0 && dy <= 0)
+                add(mom[3]);
+            if (dx >= 0 && dy <= 0)
+                add(mom[4]);
+        }
+    }
+    wf.whole = solve(mom[0]);
+    for (int q = 0; q < 4; ++q)
+        wf.quadrant[q] = solve(mom[q + 1]);
+    wf.eta = wf.whole.present ? std::sqrt(w2s2) / mom[0].s[0]
+                              : std::numeric_limits<double>::infinity();
+    return wf;
+}
+
+
+bool
+WindowFitter::edge_fires(const WindowFit& w) const
+{
+    if (!w.whole.present)
+        return false;
+    const double zl  = w.whole.luminance0();
+    const double azl = std::max(std::fabs(zl), kEps);
+    for (const Plane& q : w.quadrant) {
+        if (!q.present)
+            continue;
+        const double eta_m = std::sqrt(std::max(q.var0, 0.0)) / azl;
+        const double tau   = std::max(double(m_opt.edge_k) * eta_m,
+                                      double(m_opt.tau_min));
+        if (std::fabs(zl - q.luminance0()) / azl > tau)
+            return true;
+    }
+    return false;
+}
+
+
+void
+WindowFitter::splat(const WindowFit& w)
+{
+    const int R        = w.radius;
+    const float m      = w.mean;
+    const float am     = std::max(std::fabs(m), float(kEps));
+    const float k      = m_opt.value_k;
+    const float inv_r2 = 1.0f / float(R * R);
+    const double inv_r = 1.0 / R;
+    const float power  = m_opt.quadrant_power;
+    // Only output pixels receive.
+    const int ya = std::max(m_y0 - R, m_out.ybegin);
+    const int yb = std::min(m_y0 + R, m_out.yend - 1);
+    const int xa = std::max(m_x0 - R, m_out.xbegin);
+    const int xb = std::min(m_x0 + R, m_out.xend - 1);
+    const size_t out_w = size_t(m_out.width());
+    for (int y = ya; y <= yb; ++y) {
+        const int dy   = y - m_y0;
+        const double v = dy * inv_r;
+        size_t i       = m_in.index(xa, y);
+        for (int x = xa; x <= xb; ++x, ++i) {
+            const uint8_t cls = m_in.cls[i];
+            if (!(cls & kSurface) || !(cls & kReceiveAny))
+                continue;
+            const int dx  = x - m_x0;
+            const float g = g_at(dx, dy);
+            if (!(g > 0.0f))
+                continue;
+            float vt = 0.0f;
+            if (cls & kFitPoint)
+                vt = std::min(k * std::fabs(m_in.zl[i] - m) / am, kValueClamp);
+            const double s = g * std::exp(-(vt + float(dx * dx + dy * dy) * inv_r2));
+            const int qi   = dx >= 0 ? (dy >= 0 ? 0 : 3) : (dy >= 0 ? 1 : 2);
+            const Plane& quad = w.quadrant[qi];
+            const double u    = dx * inv_r;
+            const size_t o = size_t(y - m_out.ybegin) * out_w
+                             + size_t(x - m_out.xbegin);
+            double* acc = &m_acc[3 * o];
+            for (int ch = 0; ch < 3; ++ch) {
+                const double Z = w.whole.at(ch, u, v);
+                double A       = Z;
+                if (quad.present) {
+                    const double Zm = quad.at(ch, u, v);
+                    double wm;
+                    if ((Z < 0 && Zm > 0) || (Z > 0 && Zm < 0)) {
+                        wm = kMaxWm;
+                    } else {
+                        double r = (std::fabs(Z) + kEps) / (std::fabs(Zm) + kEps);
+                        r        = std::max(r, 1.0 / r);
+                        if (power == 8.0f) {
+                            const double r2 = r * r, r4 = r2 * r2;
+                            wm = r4 * r4;
+                        } else {
+                            wm = std::pow(r, double(power));
+                        }
+                        wm = std::min(wm, kMaxWm);
+                    }
+                    A = (Z + wm * Zm) / (1.0 + wm);
+                }
+                acc[ch] += s * A;
+            }
+            m_wsum[o] += s;
+        }
+    }
+}
+
+
+StopReason
+WindowFitter::process(int x0, int y0, int& radius)
+{
+    m_x0    = x0;
+    m_y0    = y0;
+    m_grown = -1;
+    m_zsum  = 0.0;
+    m_zcount = 0;
+    m_guide.centre(x0, y0);
+
+    WindowFit previous, current;
+    StopReason reason = StopReason::Size;
+    for (int R = m_opt.r_min;; ++R) {
+        grow_to(R);
+        current = fit(R);
+        if (edge_fires(current)) {
+            reason = StopReason::Edge;
+            if (R > m_opt.r_min)
+                current = previous;
+            break;
+        }
+        if (current.eta <= m_opt.eta_target) {
+            reason = StopReason::Quality;
+            break;
+        }
+        if (R >= m_opt.r_max) {
+            reason = StopReason::Size;
+            break;
+        }
+        previous = current;
+    }
+    radius = current.radius;
+    if (current.whole.present)
+        splat(current);
+    return reason;
+}
+
+
+bool
+check_options(ImageBuf& dst, const FilterOptions& o)
+{
+    auto bad = [&](const char* name, double value, const char* need) {
+        dst.errorfmt("regression_filter: option {} = {} is invalid: {}", name,
+                     value, need);
+        return false;
+    };
+    if (o.r_min < 1)
+        return bad("r_min", o.r_min, "needs >= 1");
+    if (o.r_max < o.r_min || o.r_max > 256)
+        return bad("r_max", o.r_max, "needs r_min <= r_max <= 256");
+    auto finite_nonneg = [](float v) { return std::isfinite(v) && v >= 0.0f; };
+    if (!finite_nonneg(o.eta_target))
+        return bad("eta_target", o.eta_target, "needs a finite number >= 0");
+    if (!finite_nonneg(o.edge_k))
+        return bad("edge_k", o.edge_k, "needs a finite number >= 0");
+    if (!finite_nonneg(o.tau_min))
+        return bad("tau_min", o.tau_min, "needs a finite number >= 0");
+    if (!finite_nonneg(o.value_k))
+        return bad("value_k", o.value_k, "needs a finite number >= 0");
+    if (!(o.sigma_good >= 0.0f))
+        return bad("sigma_good", o.sigma_good, "needs a number >= 0");
+    if (!(o.albedo_eps > 0.0f) || !std::isfinite(o.albedo_eps))
+        return bad("albedo_eps", o.albedo_eps, "needs a finite number > 0");
+    if (!finite_nonneg(o.depth_tolerance))
+        return bad("depth_tolerance", o.depth_tolerance,
+                   "needs a finite number >= 0");
+    if (!(o.normal_cut >= -1.0f && o.normal_cut < 1.0f))
+        return bad("normal_cut", o.normal_cut, "needs -1 <= normal_cut < 1");
+    if (!(o.normal_power > 0.0f) || !std::isfinite(o.normal_power))
+        return bad("normal_power", o.normal_power, "needs a finite number > 0");
+    if (!finite_nonneg(o.quadrant_power))
+        return bad("quadrant_power", o.quadrant_power,
+                   "needs a finite number >= 0");
+    return true;
+}
+
+}  // namespace
+
+
+bool
+regression_filter(ImageBuf& dst, const ImageBuf& quotient,
+                  const ImageBuf& albedo, const Guides& guides,
+                  const FilterOptions& options, FilterStats* stats, ROI roi,
+                  int nthreads)
+{
+    const char* opname = "regression_filter";
+    if (!prepare_dst(dst, quotient, roi, opname)
+        || !check_input(dst, quotient, opname, "quotient", roi, 3)
+        || !check_input(dst, albedo, opname, "albedo", quotient.roi(), 3)
+        || !check_options(dst, options))
+        return false;
+    struct NamedGuide {
+        const ImageBuf* buf;
+        const char* name;
+        int minchannels;
+    } named[] = { { guides.normal, "normal guide", 3 },
+                  { guides.depth, "depth guide", 1 },
+                  { guides.object_id, "object id guide", 1 },
+                  { guides.variance, "variance guide", 1 },
+                  { guides.half_a, "half buffer A", 3 },
+                  { guides.half_b, "half buffer B", 3 } };
+    for (const NamedGuide& g : named)
+        if (g.buf
+            && !check_input(dst, *g.buf, opname, g.name, quotient.roi(),
+                            g.minchannels))
+            return false;
+    if (!guides.variance && (!guides.half_a != !guides.half_b)) {
+        dst.errorfmt("{}: half buffers need both A and B", opname);
+        return false;
+    }
+
+    const FilterOptions& opt = options;
+    const ROI image          = quotient.roi();
+    // Everything an output pixel depends on lies within 2*r_max (centres up
+    // to r_max away, their windows r_max further) plus the noise estimate's
+    // footprint (3x3 residual, 5x5 median, 3x3 smoothing) of 4.
+    const int halo = 2 * opt.r_max + 4;
+    ROI region(roi.xbegin - halo, roi.xend + halo, roi.ybegin - halo,
+               roi.yend + halo);
+    region = roi_intersection(region, ROI(image.xbegin, image.xend,
+                                          image.ybegin, image.yend));
+
+    FilterInputs in;
+    if (!decode_filter_inputs(in, dst, quotient, albedo, guides, opt, region,
+                              nthreads))
+        return false;
+
+    const size_t npix_out = size_t(roi.width()) * size_t(roi.height());
+    std::vector<double> acc(3 * npix_out, 0.0), wsum(npix_out, 0.0);
+
+    // Centres: fit points within r_max of the output.
+    const int cy0 = std::max(image.ybegin, roi.ybegin - opt.r_max);
+    const int cy1 = std::min(image.yend, roi.yend + opt.r_max);
+    const int cx0 = std::max(image.xbegin, roi.xbegin - opt.r_max);
+    const int cx1 = std::min(image.xend, roi.xend + opt.r_max);
+    // Strips anchored at the data window's origin; strips of one parity have
+    // disjoint splat footprints and run in parallel (section 8).
+    const int strip_h   = std::max(2 * opt.r_max + 1, 32);
+    const int first     = (cy0 - image.ybegin) / strip_h;
+    const int last      = (cy1 - 1 - image.ybegin) / strip_h;
+    const int nstrips   = std::max(last - first + 1, 0);
+    std::vector<StripStats> strip_stats(static_cast<size_t>(nstrips));
+    std::atomic<int64_t> rows_done { 0 };
+    const int64_t rows_total = std::max(cy1 - cy0, 0);
+    std::mutex progress_mutex;
+
+    auto run_strip = [&](int s) {
+        const int k  = first + s;
+        const int ya = std::max(cy0, image.ybegin + k * strip_h);
+        const int yb = std::min(cy1, image.ybegin + (k + 1) * strip_h);
+        WindowFitter fitter(in, opt, roi, acc, wsum);
+        StripStats& st = strip_stats[size_t(s)];
+        for (int y = ya; y < yb; ++y) {
+            for (int x = cx0; x < cx1; ++x) {
+                if (!(in.cls[in.index(x, y)] & kFitPoint))
+                    continue;
+                int radius        = 0;
+                StopReason reason = fitter.process(x, y, radius);
+                if (!roi.contains(x, y))
+                    continue;
+                ++st.windows;
+                st.radius_sum += radius;
+                st.stop_quality += reason == StopReason::Quality;
+                st.stop_size += reason == StopReason::Size;
+                st.stop_edge += reason == StopReason::Edge;
+            }
+            const int64_t done = ++rows_done;
+            if (opt.progress) {
+                std::lock_guard<std::mutex> lock(progress_mutex);
+                opt.progress(float(done) / float(rows_total));
+            }
+        }
+    };
+    for (int parity = 0; parity < 2; ++parity) {
+        std::vector<int> strips;
+        for (int s = 0; s < nstrips; ++s)
+            if ((first + s) % 2 == parity)
+                strips.push_back(s);
+        parallel_for(int64_t(0), int64_t(strips.size()),
+                     [&](int64_t j) { run_strip(strips[size_t(j)]); },
+                     paropt(nthreads, paropt::SplitDir::Y, 1));
+    }
+
+    // Output (section 7): RGB from acc/wsum, pass-through, or 0; other
+    // channels copied.
+    ROI all_ch = roi;
+    all_ch.chbegin = 0;
+    all_ch.chend   = quotient.nchannels();
+    const int nch  = all_ch.nchannels();
+    std::vector<float> out(npix_out * size_t(nch));
+    quotient.get_pixels(all_ch, TypeFloat, out.data());
+    std::atomic<int64_t> passthrough { 0 }, nonfinite { 0 };
+    parallel_for(int64_t(roi.ybegin), int64_t(roi.yend), [&](int64_t y) {
+        int64_t pt = 0, nf = 0;
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const size_t i   = in.index(x, int(y));
+            const size_t o   = size_t(y - roi.ybegin) * size_t(roi.width())
+                             + size_t(x - roi.xbegin);
+            const uint8_t cl = in.cls[i];
+            bool passed      = false;
+            for (int ch = 0; ch < 3; ++ch) {
+                float& v = out[o * nch + ch];
+                if ((cl & (kReceiveR << ch)) && wsum[o] > 0.0) {
+                    v = float(acc[3 * o + ch] / wsum[o]);
+                } else {
+                    passed = true;
+                    if (!std::isfinite(v))
+                        v = 0.0f;
+                }
+            }
+            pt += passed;
+            nf += (cl & kNonFinite) != 0;
+        }
+        passthrough += pt;
+        nonfinite += nf;
+    }, paropt(nthreads));
+    if (!dst.set_pixels(all_ch, TypeFloat, out.data())) {
+        if (!dst.has_error())
+            dst.errorfmt("{}: could not store the result", opname);
+        return false;
+    }
+
+    if (stats) {
+        FilterStats st;
+        int64_t radius_sum = 0;
+        for (const StripStats& s : strip_stats) {
+            st.windows += s.windows;
+            st.stop_quality += s.stop_quality;
+            st.stop_size += s.stop_size;
+            st.stop_edge += s.stop_edge;
+            radius_sum += s.radius_sum;
+        }
+        st.pixels             = int64_t(npix_out);
+        st.mean_radius        = st.windows ? double(radius_sum) / st.windows
+                                           : 0.0;
+        st.passthrough_pixels = passthrough;
+        st.nonfinite_pixels   = nonfinite;
+        *stats                = st;
+    }
+    return true;
+}
+
+
+ImageBuf
+regression_filter(const ImageBuf& quotient, const ImageBuf& albedo,
+                  const Guides& guides, const FilterOptions& options,
+                  FilterStats* stats, ROI roi, int nthreads)
+{
+    ImageBuf result;
+    if (!regression_filter(result, quotient, albedo, guides, options, stats,
+                           roi, nthreads)
+        && !result.has_error())
+        result.errorfmt("regression_filter error");
+    return result;
+}
+
+}  // namespace zdenoise
