@@ -162,7 +162,8 @@ select_channels(const std::vector<std::string>& names, const std::string& select
         }
     }
     std::string wanted;
-    for (const std::string& c : role_components(role).front())
+    const auto namings = role_components(role);
+    for (const std::string& c : namings.front())
         wanted += (wanted.empty() ? "" : ",")
                   + (layer.empty() ? c : layer + "." + c);
     error = layer.empty()

@@ -292,8 +292,10 @@ load_role(InputFiles& files, const InputArg& arg, Role role,
     if (!select_channels(spec.channelnames, arg.channels, role, r.indices,
                          err))
         fail(format("{} '{}': {}", role_name(role), arg.path, err));
-    if (reference && src.roi() != reference->roi()) {
-        const ROI a = src.roi(), b = reference->roi();
+    const ROI a = src.roi();
+    const ROI b = reference ? reference->roi() : a;
+    if (a.xbegin != b.xbegin || a.xend != b.xend || a.ybegin != b.ybegin
+        || a.yend != b.yend) {
         fail(format("{} '{}' is {}x{}{:+d}{:+d}, but the noisy input '{}' is "
                     "{}x{}{:+d}{:+d}: they must cover the same pixels",
                     role_name(role), arg.path, a.width(), a.height(),

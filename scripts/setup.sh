@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Install what zdenoise needs to build and test, from Debian's packages.
+# Installs only what is missing; needs root (or sudo) when something is.
+set -euo pipefail
+packages=(g++ cmake make pkg-config libopenimageio-dev libopenexr-dev
+          openimageio-tools libgtest-dev)
+missing=()
+for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" \
+        || missing+=("$p")
+done
+if ((${#missing[@]})); then
+    echo "setup: installing ${missing[*]}"
+    sudo=""
+    [ "$(id -u)" -eq 0 ] || sudo="sudo"
+    $sudo apt-get update -q
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q --no-install-recommends "${missing[@]}"
+else
+    echo "setup: all dependencies present"
+fi

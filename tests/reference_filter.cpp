@@ -1,0 +1,767 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Reference implementation of docs/FILTER.md sections 1-7. See
+// reference_filter.h. Deliberately naive: no caching across radii or
+// centres beyond the per-pixel quantities that section 3 itself defines as
+// per-pixel images (V, Vs, sigma). All arithmetic in double.
+
+#include "reference_filter.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace zdenoise_ref {
+
+using zdenoise::FilterOptions;
+
+// ---------------------------------------------------------------------------
+// ImageBuf <-> RefImage
+
+RefImage
+from_imagebuf(const OIIO::ImageBuf& buf)
+{
+    const OIIO::ImageSpec& spec = buf.spec();
+    RefImage img(spec.width, spec.height, spec.nchannels);
+    img.x0    = spec.x;
+    img.y0    = spec.y;
+    img.alpha = spec.alpha_channel;
+    OIIO::ROI roi(spec.x, spec.x + spec.width, spec.y, spec.y + spec.height,
+                  spec.z, spec.z + 1, 0, spec.nchannels);
+    if (!buf.get_pixels(roi, OIIO::TypeFloat, img.px.data()))
+        throw std::runtime_error("from_imagebuf: get_pixels failed: "
+                                 + buf.geterror());
+    return img;
+}
+
+OIIO::ImageBuf
+to_imagebuf(const RefImage& img)
+{
+    OIIO::ImageSpec spec(img.w, img.h, img.nch, OIIO::TypeFloat);
+    spec.x = spec.full_x = img.x0;
+    spec.y = spec.full_y = img.y0;
+    spec.alpha_channel   = img.alpha;
+    OIIO::ImageBuf buf(spec);
+    buf.set_pixels(buf.roi(), OIIO::TypeFloat, img.px.data());
+    return buf;
+}
+
+// ---------------------------------------------------------------------------
+// Section 1: demodulation and remodulation
+
+namespace {
+
+constexpr double EPS    = 1e-8;
+constexpr double LW[3]  = { 0.2126, 0.7152, 0.0722 };
+constexpr double INF    = std::numeric_limits<double>::infinity();
+
+bool
+demod_channel(const RefImage& La, int x, int y, int c, float albedo_eps)
+{
+    float a = La.at(x, y, c);
+    return std::isfinite(a) && a >= albedo_eps;
+}
+
+}  // namespace
+
+RefImage
+demodulate(const RefImage& L, const RefImage& La, float albedo_eps)
+{
+    RefImage z = L;
+    for (int y = 0; y < L.h; ++y)
+        for (int x = 0; x < L.w; ++x)
+            for (int c = 0; c < 3; ++c)
+                if (demod_channel(La, x, y, c, albedo_eps))
+                    z.at(x, y, c) = L.at(x, y, c) / (La.at(x, y, c) + albedo_eps);
+    return z;
+}
+
+RefImage
+remodulate(const RefImage& z, const RefImage& La, float albedo_eps)
+{
+    RefImage L = z;
+    for (int y = 0; y < z.h; ++y)
+        for (int x = 0; x < z.w; ++x)
+            for (int c = 0; c < 3; ++c)
+                if (demod_channel(La, x, y, c, albedo_eps))
+                    L.at(x, y, c) = z.at(x, y, c) * (La.at(x, y, c) + albedo_eps);
+    return L;
+}
+
+// ---------------------------------------------------------------------------
+// Sections 2-7
+
+namespace {
+
+struct Normal {
+    bool none = true;
+    double n[3] = { 0, 0, 0 };
+};
+
+/// Everything the filter needs, with the per-pixel facts of sections 2 and 3.
+class Filter {
+public:
+    Filter(const RefImage& z, const RefImage& La, const RefGuides& g,
+           const FilterOptions& opt)
+        : z(z), La(La), g(g), opt(opt), w(z.w), h(z.h)
+    {
+    }
+
+    RefImage run(RefStats* stats);
+
+private:
+    const RefImage& z;
+    const RefImage& La;
+    const RefGuides& g;
+    const FilterOptions& opt;
+    int w, h;
+
+    // per-pixel facts
+    std::vector<char> surface_, fitpt_, receiver_;  // receiver_: 3 per pixel
+    std::vector<double> zl_, V_, Vs_, sigma_;
+
+    size_t idx(int x, int y) const { return size_t(y) * w + x; }
+
+    // ---- section 2 ----
+    bool depth_valid(int x, int y) const
+    {
+        float d = g.depth->at(x, y, 0);
+        return std::isfinite(d) && d > 0.0f && d < 1e9f;
+    }
+    bool compute_surface(int x, int y) const
+    {
+        if (z.alpha >= 0 && !(z.at(x, y, z.alpha) > 0.0f))
+            return false;
+        if (g.depth && !depth_valid(x, y))
+            return false;
+        return true;
+    }
+    bool demod(int x, int y, int c) const
+    {
+        return demod_channel(La, x, y, c, opt.albedo_eps);
+    }
+    bool surface(int x, int y) const { return surface_[idx(x, y)]; }
+    bool fitpt(int x, int y) const { return fitpt_[idx(x, y)]; }
+    bool receiver(int x, int y, int c) const { return receiver_[idx(x, y) * 3 + c]; }
+    double zl(int x, int y) const { return zl_[idx(x, y)]; }
+    double sigma(int x, int y) const { return sigma_[idx(x, y)]; }
+    double Vs(int x, int y) const { return Vs_[idx(x, y)]; }
+
+    // ---- section 4: guides ----
+    Normal normal_at(int x, int y) const
+    {
+        Normal n;
+        double v[3] = { g.normal->at(x, y, 0), g.normal->at(x, y, 1),
+                        g.normal->at(x, y, 2) };
+        double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        if (!std::isfinite(len) || len < 1e-6)
+            return n;  // none
+        n.none = false;
+        for (int i = 0; i < 3; ++i)
+            n.n[i] = v[i] / len;
+        return n;
+    }
+    static double dot(const Normal& a, const Normal& b)
+    {
+        return a.n[0] * b.n[0] + a.n[1] * b.n[1] + a.n[2] * b.n[2];
+    }
+    double weight_normal(int xq, int yq, int x0, int y0) const
+    {
+        Normal a = normal_at(xq, yq), b = normal_at(x0, y0);
+        if (a.none && b.none)
+            return 1.0;
+        if (a.none || b.none)
+            return 0.0;
+        double d = dot(a, b);
+        return d > opt.normal_cut ? std::pow(d, double(opt.normal_power)) : 0.0;
+    }
+
+    double zeta(int x, int y) const { return 1.0 / double(g.depth->at(x, y, 0)); }
+    static double minmod(double a, double b)
+    {
+        if (a > 0 && b > 0)
+            return std::min(a, b);
+        if (a < 0 && b < 0)
+            return std::max(a, b);
+        return 0.0;
+    }
+    // gradient of inverse depth at p0 along (sx, sy) = (1,0) or (0,1)
+    double zeta_gradient(int x0, int y0, int sx, int sy) const
+    {
+        bool has_f = inside_surface(x0 + sx, y0 + sy);
+        bool has_b = inside_surface(x0 - sx, y0 - sy);
+        double z0  = zeta(x0, y0);
+        double f   = has_f ? zeta(x0 + sx, y0 + sy) - z0 : 0.0;
+        double b   = has_b ? z0 - zeta(x0 - sx, y0 - sy) : 0.0;
+        if (has_f && has_b)
+            return minmod(f, b);
+        if (has_f)
+            return f;
+        if (has_b)
+            return b;
+        return 0.0;
+    }
+    bool inside_surface(int x, int y) const
+    {
+        return x >= 0 && x < w && y >= 0 && y < h && surface(x, y);
+    }
+    double weight_depth(int xq, int yq, int x0, int y0) const
+    {
+        double gx   = zeta_gradient(x0, y0, 1, 0);
+        double gy   = zeta_gradient(x0, y0, 0, 1);
+        double zhat = zeta(x0, y0) + gx * (xq - x0) + gy * (yq - y0);
+        if (zhat <= 0.0)
+            return 0.0;
+        if (std::abs(zeta(xq, yq) - zhat) > double(opt.depth_tolerance) * zhat)
+            return 0.0;
+        return 1.0;
+    }
+
+    // Cryptomatte-style (id, normalised coverage) pairs of a pixel
+    std::vector<std::pair<float, double>> id_pairs(int x, int y) const
+    {
+        const RefImage& id = *g.object_id;
+        int k = id.nch / 2;
+        std::vector<std::pair<float, double>> p(k);
+        double sum = 0.0;
+        for (int i = 0; i < k; ++i) {
+            double c = id.at(x, y, 2 * i + 1);
+            if (!std::isfinite(c) || c < 0.0)
+                c = 0.0;
+            p[i] = { id.at(x, y, 2 * i), c };
+            sum += c;
+        }
+        if (sum > 0.0)
+            for (auto& e : p)
+                e.second /= sum;
+        return p;
+    }
+    double weight_id(int xq, int yq, int x0, int y0) const
+    {
+        const RefImage& id = *g.object_id;
+        if (id.nch == 1)
+            return id.at(xq, yq, 0) == id.at(x0, y0, 0) ? 1.0 : 0.0;
+        auto pq = id_pairs(xq, yq), p0 = id_pairs(x0, y0);
+        double sq = 0, s0 = 0;
+        for (auto& e : pq)
+            sq += e.second;
+        for (auto& e : p0)
+            s0 += e.second;
+        if (sq == 0.0 || s0 == 0.0)  // no coverage matches only no coverage
+            return (sq == 0.0 && s0 == 0.0) ? 1.0 : 0.0;
+        double sum = 0.0;
+        for (auto& a : pq)
+            for (auto& b : p0)
+                if (a.first == b.first)
+                    sum += std::min(a.second, b.second);
+        return sum;
+    }
+
+    /// The plain id, or the "primary" Cryptomatte id, read as the id of the
+    /// largest normalised coverage (the first such pair on ties). FILTER.md
+    /// does not say; for Cryptomatte, whose ranks are sorted by coverage,
+    /// this is rank 0 whenever rank 0 has coverage.
+    float primary_id(int x, int y) const
+    {
+        const RefImage& id = *g.object_id;
+        if (id.nch == 1)
+            return id.at(x, y, 0);
+        auto pairs = id_pairs(x, y);
+        size_t best = 0;
+        for (size_t i = 1; i < pairs.size(); ++i)
+            if (pairs[i].second > pairs[best].second)
+                best = i;
+        return pairs[best].first;
+    }
+
+    /// g(q; p0) of section 4.
+    double guide_weight(int xq, int yq, int x0, int y0) const
+    {
+        if (xq == x0 && yq == y0)
+            return 1.0;
+        double wn = g.normal ? weight_normal(xq, yq, x0, y0) : 1.0;
+        double wd = g.depth ? weight_depth(xq, yq, x0, y0) : 1.0;
+        double wi = g.object_id ? weight_id(xq, yq, x0, y0) : 1.0;
+        return wn * wd * wi;
+    }
+
+    // ---- section 3: noise ----
+    bool same_surface_for_noise(int xa, int ya, int xb, int yb) const
+    {
+        if (g.object_id && primary_id(xa, ya) != primary_id(xb, yb))
+            return false;
+        if (g.normal) {
+            Normal a = normal_at(xa, ya), b = normal_at(xb, yb);
+            if (a.none != b.none)
+                return false;
+            if (!a.none && !(dot(a, b) > 0.9))
+                return false;
+        }
+        return true;
+    }
+    void compute_noise();
+
+    // ---- section 5: one window ----
+    struct Pt {
+        int x, y;
+        double u, v;     // dx/R, dy/R
+        double w;        // fit weight
+        double z[3];     // quotient
+        double vs;       // smoothed variance Vs
+        double sigma;
+    };
+    struct Fit {
+        bool present  = false;
+        bool constant = false;
+        double c[3] = { 0, 0, 0 }, a[3] = { 0, 0, 0 }, b[3] = { 0, 0, 0 };
+        double var0 = 0.0;  // predicted variance of the luminance value at p0
+        double at(int ch, double u, double v) const
+        {
+            return c[ch] + a[ch] * u + b[ch] * v;
+        }
+        double lum0() const { return LW[0] * c[0] + LW[1] * c[1] + LW[2] * c[2]; }
+    };
+    struct Window {
+        int R = 0;
+        double m = 0.0;  // mean zl over P_R
+        Fit whole, quad[4];
+        double eta  = INF;
+        bool edge   = false;
+    };
+    static Fit fit(const std::vector<Pt>& pts);
+    Window window(int x0, int y0, int R) const;
+    double value_term(int xq, int yq, double m) const
+    {
+        double vt = double(opt.value_k) * std::abs(zl(xq, yq) - m)
+                    / std::max(std::abs(m), EPS);
+        return std::min(vt, 30.0);
+    }
+};
+
+// Section 3.
+void
+Filter::compute_noise()
+{
+    const float eps = opt.albedo_eps;
+    std::vector<double> V(size_t(w) * h, 0.0);
+
+    if (g.variance || (g.half_a && g.half_b)) {
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                if (!fitpt(x, y))
+                    continue;
+                double sum = 0.0;
+                for (int c = 0; c < 3; ++c) {
+                    double varL;
+                    if (g.variance) {
+                        int vc = g.variance->nch >= 3 ? c : 0;
+                        varL   = g.variance->at(x, y, vc);
+                    } else {
+                        double d = double(g.half_a->at(x, y, c))
+                                   - double(g.half_b->at(x, y, c));
+                        varL = d * d / 4.0;
+                    }
+                    double den = double(La.at(x, y, c)) + double(eps);
+                    sum += LW[c] * varL / (den * den);
+                }
+                V[idx(x, y)] = sum;
+            }
+    } else {
+        // estimated from z: e(p) from the 8 same-surface neighbours
+        std::vector<double> e(size_t(w) * h, 0.0);
+        std::vector<char> e_def(size_t(w) * h, 0);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                if (!fitpt(x, y))
+                    continue;
+                int n      = 0;
+                double sum = 0.0;
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        int xn = x + dx, yn = y + dy;
+                        if ((dx == 0 && dy == 0) || !z.inside(xn, yn))
+                            continue;
+                        if (!fitpt(xn, yn) || !same_surface_for_noise(x, y, xn, yn))
+                            continue;
+                        ++n;
+                        sum += zl(xn, yn);
+                    }
+                if (n == 0)
+                    continue;
+                double r        = zl(x, y) - sum / n;
+                e[idx(x, y)]     = r * r * n / (n + 1.0);
+                e_def[idx(x, y)] = 1;
+            }
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                if (!fitpt(x, y))
+                    continue;
+                std::vector<double> vals;
+                for (int dy = -2; dy <= 2; ++dy)
+                    for (int dx = -2; dx <= 2; ++dx) {
+                        int xn = x + dx, yn = y + dy;
+                        if (z.inside(xn, yn) && e_def[idx(xn, yn)])
+                            vals.push_back(e[idx(xn, yn)]);
+                    }
+                if (vals.empty())
+                    continue;  // V = 0
+                std::sort(vals.begin(), vals.end());
+                size_t n = vals.size();
+                // median; for an even count the mean of the two middle values
+                double med = (n % 2) ? vals[n / 2]
+                                     : 0.5 * (vals[n / 2 - 1] + vals[n / 2]);
+                V[idx(x, y)] = med / 0.4549;
+            }
+    }
+    V_ = V;
+
+    // 3x3 smoothing over fit points, and sigma
+    Vs_.assign(size_t(w) * h, 0.0);
+    sigma_.assign(size_t(w) * h, 0.0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            if (!fitpt(x, y))
+                continue;
+            int n = 0;
+            double sv = 0.0, sz = 0.0;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    int xn = x + dx, yn = y + dy;
+                    if (!z.inside(xn, yn) || !fitpt(xn, yn))
+                        continue;
+                    ++n;
+                    sv += V[idx(xn, yn)];
+                    sz += zl(xn, yn);
+                }
+            double vs = sv / n, zs = sz / n;
+            Vs_[idx(x, y)]    = vs;
+            sigma_[idx(x, y)] = std::sqrt(vs) / std::max(std::abs(zs), EPS);
+        }
+}
+
+// A weighted least-squares plane c + a u + b v (section 5).
+Filter::Fit
+Filter::fit(const std::vector<Pt>& pts)
+{
+    Fit f;
+    double sumw = 0.0;
+    int npos    = 0;
+    double M[3][3] = {}, S[3][3] = {}, rhs[3][3] = {};  // rhs[channel][k]
+    double sumw2vs = 0.0, sumwz[3] = { 0, 0, 0 };
+    for (const Pt& p : pts) {
+        double basis[3] = { 1.0, p.u, p.v };
+        sumw += p.w;
+        if (p.w > 0.0)
+            ++npos;
+        sumw2vs += p.w * p.w * p.vs;
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) {
+                M[i][j] += p.w * basis[i] * basis[j];
+                S[i][j] += p.w * p.w * p.vs * basis[i] * basis[j];
+            }
+        for (int c = 0; c < 3; ++c) {
+            sumwz[c] += p.w * p.z[c];
+            for (int i = 0; i < 3; ++i)
+                rhs[c][i] += p.w * p.z[c] * basis[i];
+        }
+    }
+    if (sumw == 0.0)
+        return f;  // absent
+    f.present = true;
+
+    double det = M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1])
+                 - M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0])
+                 + M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0]);
+    if (npos < 3 || det <= 1e-6 * sumw * sumw * sumw) {
+        f.constant = true;
+        for (int c = 0; c < 3; ++c)
+            f.c[c] = sumwz[c] / sumw;
+        f.var0 = sumw2vs / (sumw * sumw);
+        return f;
+    }
+    // inverse by cofactors (M is symmetric)
+    double inv[3][3];
+    inv[0][0] = (M[1][1] * M[2][2] - M[1][2] * M[2][1]) / det;
+    inv[0][1] = (M[0][2] * M[2][1] - M[0][1] * M[2][2]) / det;
+    inv[0][2] = (M[0][1] * M[1][2] - M[0][2] * M[1][1]) / det;
+    inv[1][0] = (M[1][2] * M[2][0] - M[1][0] * M[2][2]) / det;
+    inv[1][1] = (M[0][0] * M[2][2] - M[0][2] * M[2][0]) / det;
+    inv[1][2] = (M[0][2] * M[1][0] - M[0][0] * M[1][2]) / det;
+    inv[2][0] = (M[1][0] * M[2][1] - M[1][1] * M[2][0]) / det;
+    inv[2][1] = (M[0][1] * M[2][0] - M[0][0] * M[2][1]) / det;
+    inv[2][2] = (M[0][0] * M[1][1] - M[0][1] * M[1][0]) / det;
+    for (int c = 0; c < 3; ++c) {
+        double coef[3];
+        for (int i = 0; i < 3; ++i)
+            coef[i] = inv[i][0] * rhs[c][0] + inv[i][1] * rhs[c][1]
+                      + inv[i][2] * rhs[c][2];
+        f.c[c] = coef[0];
+        f.a[c] = coef[1];
+        f.b[c] = coef[2];
+    }
+    // var = e0^T M^-1 S M^-1 e0 = k^T S k with k = M^-1 e0
+    double k[3] = { inv[0][0], inv[1][0], inv[2][0] };
+    double var  = 0.0;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            var += k[i] * S[i][j] * k[j];
+    f.var0 = var;
+    return f;
+}
+
+// Section 5, one radius, everything from scratch.
+Filter::Window
+Filter::window(int x0, int y0, int R) const
+{
+    Window W;
+    W.R = R;
+    const int xa = std::max(x0 - R, 0), xb = std::min(x0 + R, w - 1);
+    const int ya = std::max(y0 - R, 0), yb = std::min(y0 + R, h - 1);
+
+    // P_R and its mean
+    std::vector<std::pair<int, int>> P;
+    std::vector<double> gw;
+    for (int y = ya; y <= yb; ++y)
+        for (int x = xa; x <= xb; ++x) {
+            if (!fitpt(x, y))
+                continue;
+            double gq = guide_weight(x, y, x0, y0);
+            if (gq > 0.0) {
+                P.push_back({ x, y });
+                gw.push_back(gq);
+            }
+        }
+    double sum = 0.0;
+    for (auto& p : P)
+        sum += zl(p.first, p.second);
+    W.m = sum / double(P.size());  // never empty: p0 is in P
+
+    // good points with their fit weights
+    std::vector<Pt> good;
+    const double R2 = double(R) * R;
+    for (size_t i = 0; i < P.size(); ++i) {
+        int x = P[i].first, y = P[i].second;
+        if (!(sigma(x, y) <= double(opt.sigma_good)))
+            continue;
+        int dx = x - x0, dy = y - y0;
+        Pt p;
+        p.x = x;
+        p.y = y;
+        p.u = double(dx) / R;
+        p.v = double(dy) / R;
+        double vt = value_term(x, y, W.m);
+        p.w = gw[i] * std::exp(-(vt + sigma(x, y) + (dx * dx + dy * dy) / R2));
+        for (int c = 0; c < 3; ++c)
+            p.z[c] = z.at(x, y, c);
+        p.vs    = Vs(x, y);
+        p.sigma = sigma(x, y);
+        good.push_back(p);
+    }
+
+    // five fits over closed quadrants
+    W.whole = fit(good);
+    for (int m = 0; m < 4; ++m) {
+        std::vector<Pt> q;
+        for (const Pt& p : good) {
+            int dx = p.x - x0, dy = p.y - y0;
+            bool in = (m == 0) ? (dx >= 0 && dy >= 0)
+                    : (m == 1) ? (dx <= 0 && dy >= 0)
+                    : (m == 2) ? (dx <= 0 && dy <= 0)
+                               : (dx >= 0 && dy <= 0);
+            if (in)
+                q.push_back(p);
+        }
+        W.quad[m] = fit(q);
+    }
+
+    // eta
+    if (W.whole.present) {
+        double sw = 0.0, sw2s2 = 0.0;
+        for (const Pt& p : good) {
+            sw += p.w;
+            sw2s2 += p.w * p.w * p.sigma * p.sigma;
+        }
+        W.eta = std::sqrt(sw2s2) / sw;
+    }
+
+    // edge test
+    if (W.whole.present) {
+        double Zl = W.whole.lum0();
+        double sc = std::max(std::abs(Zl), EPS);
+        for (int m = 0; m < 4; ++m) {
+            if (!W.quad[m].present)
+                continue;
+            double Zlm   = W.quad[m].lum0();
+            double eta_m = std::sqrt(W.quad[m].var0) / sc;
+            double tau   = std::max(double(opt.edge_k) * eta_m, double(opt.tau_min));
+            if (std::abs(Zl - Zlm) / sc > tau)
+                W.edge = true;
+        }
+    }
+    return W;
+}
+
+RefImage
+Filter::run(RefStats* stats)
+{
+    // ---- section 2: pixel classes ----
+    surface_.assign(size_t(w) * h, 0);
+    fitpt_.assign(size_t(w) * h, 0);
+    receiver_.assign(size_t(w) * h * 3, 0);
+    zl_.assign(size_t(w) * h, 0.0);
+    RefStats st;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            bool s             = compute_surface(x, y);
+            surface_[idx(x, y)] = s;
+            bool fp            = s;
+            bool nonfinite     = false;
+            for (int c = 0; c < 3; ++c) {
+                bool d = demod(x, y, c);
+                receiver_[idx(x, y) * 3 + c] = s && d;
+                bool fin                     = std::isfinite(z.at(x, y, c));
+                if (!fin)
+                    nonfinite = true;
+                if (!d || !fin)
+                    fp = false;
+            }
+            fitpt_[idx(x, y)] = fp;
+            if (fp)
+                zl_[idx(x, y)] = LW[0] * z.at(x, y, 0) + LW[1] * z.at(x, y, 1)
+                                 + LW[2] * z.at(x, y, 2);
+            if (nonfinite)
+                ++st.nonfinite_pixels;
+        }
+
+    // ---- section 3 ----
+    compute_noise();
+
+    // ---- sections 5 and 6: centres in raster order ----
+    std::vector<double> acc(size_t(w) * h * 3, 0.0), wsum(size_t(w) * h, 0.0);
+    double radius_sum = 0.0;
+    for (int y0 = 0; y0 < h; ++y0)
+        for (int x0 = 0; x0 < w; ++x0) {
+            if (!fitpt(x0, y0))
+                continue;
+            ++st.windows;
+            Window fin;
+            for (int R = opt.r_min; R <= opt.r_max; ++R) {
+                Window W = window(x0, y0, R);
+                if (W.edge) {
+                    fin = (R > opt.r_min) ? window(x0, y0, R - 1) : W;
+                    ++st.stop_edge;
+                    break;
+                }
+                if (W.eta <= double(opt.eta_target)) {
+                    fin = W;
+                    ++st.stop_quality;
+                    break;
+                }
+                if (R == opt.r_max) {
+                    fin = W;
+                    ++st.stop_size;
+                    break;
+                }
+            }
+            radius_sum += fin.R;
+            if (!fin.whole.present) {
+                ++st.absent_windows;
+                continue;  // contributes nothing
+            }
+
+            // section 6: combination and splatting over W_R
+            const int R  = fin.R;
+            const double R2 = double(R) * R;
+            const int xa = std::max(x0 - R, 0), xb = std::min(x0 + R, w - 1);
+            const int ya = std::max(y0 - R, 0), yb = std::min(y0 + R, h - 1);
+            for (int yq = ya; yq <= yb; ++yq)
+                for (int xq = xa; xq <= xb; ++xq) {
+                    if (!surface(xq, yq))
+                        continue;
+                    if (!receiver(xq, yq, 0) && !receiver(xq, yq, 1)
+                        && !receiver(xq, yq, 2))
+                        continue;
+                    double gq = guide_weight(xq, yq, x0, y0);
+                    if (!(gq > 0.0))
+                        continue;
+                    int dx = xq - x0, dy = yq - y0;
+                    double u = double(dx) / R, v = double(dy) / R;
+                    int m = (dx >= 0 && dy >= 0) ? 0
+                          : (dx < 0 && dy >= 0)  ? 1
+                          : (dx < 0 && dy < 0)   ? 2
+                                                 : 3;
+                    double vt = fitpt(xq, yq) ? value_term(xq, yq, fin.m) : 0.0;
+                    double s  = gq * std::exp(-(vt + (dx * dx + dy * dy) / R2));
+                    for (int c = 0; c < 3; ++c) {
+                        double Z = fin.whole.at(c, u, v);
+                        double A = Z;
+                        if (fin.quad[m].present) {
+                            double Zm = fin.quad[m].at(c, u, v);
+                            double wm;
+                            if (Z * Zm < 0.0) {
+                                wm = 1e6;
+                            } else {
+                                double r = (std::abs(Z) + EPS) / (std::abs(Zm) + EPS);
+                                wm = std::min(std::pow(std::max(r, 1.0 / r),
+                                                       double(opt.quadrant_power)),
+                                              1e6);
+                            }
+                            A = (Z + wm * Zm) / (1.0 + wm);
+                        }
+                        acc[idx(xq, yq) * 3 + c] += s * A;
+                    }
+                    wsum[idx(xq, yq)] += s;
+                }
+        }
+
+    // ---- section 7: output ----
+    RefImage out = z;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            bool passthrough = false;
+            for (int c = 0; c < 3; ++c) {
+                double ws = wsum[idx(x, y)];
+                if (receiver(x, y, c) && ws > 0.0) {
+                    out.at(x, y, c) = float(acc[idx(x, y) * 3 + c] / ws);
+                } else {
+                    passthrough = true;
+                    float zc    = z.at(x, y, c);
+                    out.at(x, y, c) = std::isfinite(zc) ? zc : 0.0f;
+                }
+            }
+            if (passthrough)
+                ++st.passthrough_pixels;
+        }
+
+    st.pixels      = int64_t(w) * h;
+    st.mean_radius = st.windows ? radius_sum / double(st.windows) : 0.0;
+    if (stats)
+        *stats = st;
+    return out;
+}
+
+}  // namespace
+
+RefImage
+regression_filter(const RefImage& z, const RefImage& La, const RefGuides& guides,
+                  const FilterOptions& opt, RefStats* stats)
+{
+    if (z.nch < 3 || La.nch < 3 || La.w != z.w || La.h != z.h)
+        throw std::invalid_argument("regression_filter: bad inputs");
+    Filter f(z, La, guides, opt);
+    return f.run(stats);
+}
+
+RefImage
+denoise(const RefImage& L, const RefImage& La, const RefGuides& guides,
+        const FilterOptions& opt, RefStats* stats)
+{
+    RefImage z  = demodulate(L, La, opt.albedo_eps);
+    RefImage zf = regression_filter(z, La, guides, opt, stats);
+    return remodulate(zf, La, opt.albedo_eps);
+}
+
+}  // namespace zdenoise_ref

@@ -1,0 +1,300 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// The zdenoise command as a user runs it: the bundled sample, and wrong
+// inputs each failing with one clear line, a non-zero exit, and no output
+// file touched or left behind.
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <algorithm>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+
+#include <zdenoise/version.h>
+
+using namespace OIIO;
+
+namespace {
+
+const std::string kCli       = ZDENOISE_CLI;
+const std::string kSourceDir = ZDENOISE_SOURCE_DIR;
+
+struct RunResult {
+    int status = -1;
+    std::string out, err;
+};
+
+std::string
+slurp(const std::string& path)
+{
+    std::ifstream f(path);
+    std::stringstream s;
+    s << f.rdbuf();
+    return s.str();
+}
+
+class CliTest : public ::testing::Test {
+protected:
+    void SetUp() override
+    {
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        dir = Filesystem::temp_directory_path() + "/zdenoise_cli_"
+              + info->name() + "_" + std::to_string(::getpid());
+        Filesystem::remove_all(dir);
+        Filesystem::create_directory(dir);
+    }
+    void TearDown() override { Filesystem::remove_all(dir); }
+
+    std::string path(const std::string& name) const { return dir + "/" + name; }
+
+    /// Run zdenoise with `args` (already shell-quoted where needed).
+    RunResult run(const std::string& args) const
+    {
+        RunResult r;
+        std::string cmd = "'" + kCli + "' " + args + " >'" + path("stdout.txt")
+                          + "' 2>'" + path("stderr.txt") + "'";
+        int rc   = std::system(cmd.c_str());
+        r.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+        r.out    = slurp(path("stdout.txt"));
+        r.err    = slurp(path("stderr.txt"));
+        Filesystem::remove(path("stdout.txt"));
+        Filesystem::remove(path("stderr.txt"));
+        return r;
+    }
+
+    /// Files in the test folder (to see that nothing was left behind).
+    std::vector<std::string> files() const
+    {
+        std::vector<std::string> names;
+        Filesystem::get_directory_entries(dir, names);
+        for (auto& n : names)
+            n = Filesystem::filename(n);
+        std::sort(names.begin(), names.end());
+        return names;
+    }
+
+    /// Write a small float image with the given channels, all set to value.
+    void write_image(const std::string& name, int w, int h,
+                     std::vector<std::string> channels, float value,
+                     TypeDesc type = TypeFloat) const
+    {
+        ImageSpec spec(w, h, int(channels.size()), type);
+        spec.channelnames = channels;
+        spec.alpha_channel = -1;
+        ImageBuf buf(spec);
+        std::vector<float> v(channels.size(), value);
+        ImageBufAlgo::fill(buf, v);
+        ASSERT_TRUE(buf.write(path(name))) << buf.geterror();
+    }
+
+    std::string dir;
+};
+
+/// Expect a failure: non-zero exit, one line on stderr mentioning `needle`.
+void
+expect_one_line_error(const RunResult& r, const std::string& needle)
+{
+    EXPECT_NE(r.status, 0) << "expected failure, got success";
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1)
+        << "stderr should be exactly one line:\n"
+        << r.err;
+    EXPECT_NE(r.err.find("zdenoise: error:"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(needle), std::string::npos)
+        << "stderr should name '" << needle << "':\n"
+        << r.err;
+}
+
+double
+rel_mse(const ImageBuf& img, const ImageBuf& ref, int img_ch0)
+{
+    const ROI roi = ref.roi();
+    double sum    = 0.0;
+    for (int y = roi.ybegin; y < roi.yend; ++y)
+        for (int x = roi.xbegin; x < roi.xend; ++x)
+            for (int c = 0; c < 3; ++c) {
+                double a = img.getchannel(x, y, 0, img_ch0 + c);
+                double b = ref.getchannel(x, y, 0, c);
+                sum += (a - b) * (a - b) / (b * b + 1e-2);
+            }
+    return sum / (3.0 * roi.npixels());
+}
+
+}  // namespace
+
+
+TEST_F(CliTest, DenoisesBundledSampleKeepingEverythingElse)
+{
+    const std::string in  = kSourceDir + "/share/samples/cornell_textured_spp16_crop.exr";
+    const std::string ref = kSourceDir + "/share/samples/cornell_textured_ref_crop.exr";
+    RunResult r = run("--in '" + in + "' -o '" + path("out.exr") + "'");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(files(), std::vector<std::string> { "out.exr" })
+        << "no temporary file may be left behind";
+
+    ImageBuf noisy(in), out(path("out.exr")), truth(ref);
+    ASSERT_TRUE(out.read(0, 0, true, TypeFloat)) << out.geterror();
+    const double before = rel_mse(noisy, truth, 0);
+    const double after  = rel_mse(out, truth, 0);
+    EXPECT_LT(after * 10.0, before)
+        << "relMSE noisy " << before << " -> denoised " << after
+        << ": expected at least 10x less noise on the bundled crop";
+
+    // Every channel and the metadata carried through; non-beauty channels
+    // bit-identical.
+    ASSERT_EQ(out.nchannels(), noisy.nchannels());
+    EXPECT_EQ(out.spec().channelnames, noisy.spec().channelnames);
+    int diffcol = noisy.spec().channelindex("ViewLayer.DiffCol.G");
+    ASSERT_GE(diffcol, 0);
+    for (int y = 0; y < 96; y += 7)
+        for (int x = 0; x < 96; x += 5)
+            ASSERT_EQ(out.getchannel(x, y, 0, diffcol),
+                      noisy.getchannel(x, y, 0, diffcol));
+    EXPECT_NE(out.spec().get_string_attribute("cryptomatte/542cafa/manifest"), "");
+    EXPECT_EQ(out.spec().get_string_attribute("zdenoise:version"), ZDENOISE_VERSION_STRING);
+    EXPECT_NE(out.spec().get_string_attribute("zdenoise:parameters").find("eta=0.02"),
+              std::string::npos);
+}
+
+
+TEST_F(CliTest, SeparateFilesKeepTheInputPixelType)
+{
+    write_image("noisy.exr", 24, 20, { "R", "G", "B", "A" }, 0.5f, TypeHalf);
+    write_image("albedo.exr", 24, 20, { "R", "G", "B" }, 0.5f);
+    RunResult r = run("--in " + path("noisy.exr") + " --albedo " + path("albedo.exr")
+                      + " -o " + path("out.exr") + " -v");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("passed through"), std::string::npos) << r.out;
+    auto in = ImageInput::open(path("out.exr"));
+    ASSERT_TRUE(in);
+    EXPECT_EQ(in->spec().format, TypeHalf) << "half input must give half output";
+    ImageBuf out(path("out.exr"));
+    EXPECT_NEAR(out.getchannel(10, 10, 0, 0), 0.5f, 1e-3f)
+        << "a constant image stays constant";
+}
+
+
+TEST_F(CliTest, MissingInputFile)
+{
+    RunResult r = run("--in " + path("nope.exr") + " --albedo " + path("nope2.exr")
+                      + " -o " + path("out.exr"));
+    expect_one_line_error(r, "nope.exr");
+    EXPECT_TRUE(files().empty());
+}
+
+
+TEST_F(CliTest, SizeMismatchBetweenInputs)
+{
+    write_image("noisy.exr", 32, 32, { "R", "G", "B" }, 0.5f);
+    write_image("albedo.exr", 16, 16, { "R", "G", "B" }, 0.5f);
+    RunResult r = run("--in " + path("noisy.exr") + " --albedo " + path("albedo.exr")
+                      + " -o " + path("out.exr"));
+    expect_one_line_error(r, "albedo.exr");
+    EXPECT_NE(r.err.find("16x16"), std::string::npos) << r.err;
+    EXPECT_FALSE(Filesystem::exists(path("out.exr")));
+}
+
+
+TEST_F(CliTest, MissingChannel)
+{
+    write_image("noisy.exr", 16, 16, { "R", "G", "B" }, 0.5f);
+    write_image("albedo.exr", 16, 16, { "R", "G", "B" }, 0.5f);
+    RunResult r = run("--in " + path("noisy.exr") + " --albedo:ch=Diffuse.R,Diffuse.G,Diffuse.B "
+                      + path("albedo.exr") + " -o " + path("out.exr"));
+    expect_one_line_error(r, "Diffuse.R");
+    EXPECT_FALSE(Filesystem::exists(path("out.exr")));
+
+    // A file with no R,G,B at all and no selection.
+    write_image("xyz.exr", 16, 16, { "X", "Y", "Z" }, 0.5f);
+    r = run("--in " + path("xyz.exr") + " --albedo " + path("albedo.exr") + " -o "
+            + path("out.exr"));
+    expect_one_line_error(r, "radiance");
+}
+
+
+TEST_F(CliTest, UnknownOptionAndBadValues)
+{
+    RunResult r = run("--in a.exr -o b.exr --frobnicate");
+    expect_one_line_error(r, "--frobnicate");
+    EXPECT_EQ(r.status, 2);
+    r = run("--in a.exr -o b.exr --eta banana");
+    expect_one_line_error(r, "--eta");
+    r = run("--in a.exr");
+    expect_one_line_error(r, "-o");
+}
+
+
+TEST_F(CliTest, InvalidFilterParameter)
+{
+    write_image("noisy.exr", 16, 16, { "R", "G", "B" }, 0.5f);
+    write_image("albedo.exr", 16, 16, { "R", "G", "B" }, 0.5f);
+    RunResult r = run("--in " + path("noisy.exr") + " --albedo " + path("albedo.exr")
+                      + " --rmin 5 --rmax 3 -o " + path("out.exr"));
+    expect_one_line_error(r, "r_max");
+    EXPECT_FALSE(Filesystem::exists(path("out.exr")));
+}
+
+
+TEST_F(CliTest, UnwritableOutputLeavesNothing)
+{
+    write_image("noisy.exr", 16, 16, { "R", "G", "B" }, 0.5f);
+    write_image("albedo.exr", 16, 16, { "R", "G", "B" }, 0.5f);
+    RunResult r = run("--in " + path("noisy.exr") + " --albedo " + path("albedo.exr")
+                      + " -o " + path("no/such/folder/out.exr"));
+    expect_one_line_error(r, "no/such/folder/out.exr");
+    EXPECT_EQ(files(), (std::vector<std::string> { "albedo.exr", "noisy.exr" }));
+}
+
+
+TEST_F(CliTest, ExistingOutputUntouchedOnFailure)
+{
+    write_image("noisy.exr", 16, 16, { "R", "G", "B" }, 0.5f);
+    write_image("albedo.exr", 8, 8, { "R", "G", "B" }, 0.5f);
+    write_image("out.exr", 4, 4, { "R", "G", "B" }, 0.25f);
+    const std::string before = slurp(path("out.exr"));
+    RunResult r = run("--in " + path("noisy.exr") + " --albedo " + path("albedo.exr")
+                      + " -o " + path("out.exr"));
+    EXPECT_NE(r.status, 0);
+    EXPECT_EQ(slurp(path("out.exr")), before) << "the old output must survive";
+    EXPECT_EQ(files().size(), 3u) << "no temporary file may be left behind";
+}
+
+
+TEST_F(CliTest, OutputSameAsInputRefusedWithoutForce)
+{
+    write_image("noisy.exr", 16, 16, { "R", "G", "B" }, 0.5f);
+    write_image("albedo.exr", 16, 16, { "R", "G", "B" }, 0.5f);
+    const std::string before = slurp(path("noisy.exr"));
+    RunResult r = run("--in " + path("noisy.exr") + " --albedo " + path("albedo.exr")
+                      + " -o " + path("noisy.exr"));
+    expect_one_line_error(r, "--force");
+    EXPECT_EQ(slurp(path("noisy.exr")), before);
+    r = run("--in " + path("noisy.exr") + " --albedo " + path("albedo.exr") + " -o "
+            + path("noisy.exr") + " --force");
+    EXPECT_EQ(r.status, 0) << r.err;
+}
+
+
+TEST_F(CliTest, VersionAndHelp)
+{
+    RunResult r = run("--version");
+    EXPECT_EQ(r.status, 0);
+    EXPECT_NE(r.out.find(ZDENOISE_VERSION_STRING), std::string::npos);
+    r = run("--help");
+    EXPECT_EQ(r.status, 0);
+    for (const char* opt : { "--in", "--albedo", "--normal", "--depth", "--id", "--variance",
+                             "--halves", "--threads", "--eta", "--rmax", ":ch=" })
+        EXPECT_NE(r.out.find(opt), std::string::npos) << "help lacks " << opt;
+}
