@@ -53,8 +53,7 @@ same_surface(const FilterInputs& in, size_t a, size_t b)
     if (!in.normal.empty()) {
         const float* na = &in.normal[3 * a];
         const float* nb = &in.normal[3 * b];
-        const bool za = na[0] == 0 && na[1] == 0 && na[2] == 0;
-        const bool zb = nb[0] == 0 && nb[1] == 0 && nb[2] == 0;
+        const bool za = no_normal(na), zb = no_normal(nb);
         if (za != zb)
             return false;
         if (!za && na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2] <= 0.9f)
@@ -352,8 +351,7 @@ GuideWeight::operator()(int x, int y) const
     if (!m_in.normal.empty()) {
         const float* n  = &m_in.normal[3 * i];
         const float* n0 = &m_in.normal[3 * m_i0];
-        const bool z    = n[0] == 0 && n[1] == 0 && n[2] == 0;
-        const bool z0   = n0[0] == 0 && n0[1] == 0 && n0[2] == 0;
+        const bool z    = no_normal(n), z0 = no_normal(n0);
         if (z != z0)
             return 0.0f;
         if (!z) {

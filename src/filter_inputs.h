@@ -36,6 +36,13 @@ same_id(float a, float b)
     return ia == ib;
 }
 
+/// A decoded normal is all zero where the pixel has none.
+inline bool
+no_normal(const float* n)
+{
+    return n[0] == 0.0f && n[1] == 0.0f && n[2] == 0.0f;
+}
+
 /// The decoded filter input over `region` (row-major, `width` pixels a row).
 struct FilterInputs {
     ROI region;          ///< pixels held (within the image's data window)

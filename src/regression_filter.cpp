@@ -141,10 +141,10 @@ private:
         return m_g[size_t(dy + m_opt.r_max) * m_side + (dx + m_opt.r_max)];
     }
     /// Extend the cached guide weights and point sums to radius R.
-    void grow_to(int R);
-    WindowFit fit(int R);
+    [[gnu::noinline]] void grow_to(int R);
+    [[gnu::noinline]] WindowFit fit(int R);
     bool edge_fires(const WindowFit& w) const;
-    void splat(const WindowFit& w);
+    [[gnu::noinline]] void splat(const WindowFit& w);
 
     const FilterInputs& m_in;
     const FilterOptions& m_opt;

@@ -66,13 +66,17 @@ Output:
   --force              Allow the output to replace one of the inputs.
 
 Filter parameters (docs/FILTER.md):
+  --preset NAME        Start from a parameter set: 'tuned' (default, tuned on
+                       the public benchmark) or 'spec' (ALGORITHM.md section
+                       8: edge-k 3, value-k 2, sigma-good 1); the options
+                       below override it wherever they stand.
   --rmin N             Smallest window half-size (default 2)
   --rmax N             Largest window half-size (default 16)
   --eta X              Target relative noise at the window centre (0.02)
-  --edge-k X           Strong-variation stop: multiple of the noise (3)
+  --edge-k X           Strong-variation stop: multiple of the noise (1.5)
   --tau-min X          Strong-variation stop: smallest level (0.05)
-  --value-k X          Strength of the value weight (2)
-  --sigma-good X       Noisiest point taking part in fits (1.0)
+  --value-k X          Strength of the value weight (1)
+  --sigma-good X       Noisiest point taking part in fits (3)
   --albedo-eps X       Smallest albedo demodulated (0.001)
   --depth-tol X        Relative depth departure ending a surface (0.02)
   --normal-cut X       Normal weight is 0 at or below this dot product (0.5)
@@ -155,6 +159,18 @@ parse_args(int argc, char* argv[])
 {
     Args a;
     std::vector<std::string> av(argv + 1, argv + argc);
+    // The preset is the base the other filter options modify, wherever it
+    // stands on the command line.
+    for (size_t k = 0; k + 1 < av.size(); ++k)
+        if (av[k] == "--preset") {
+            if (av[k + 1] == "spec")
+                a.filter = FilterOptions::algorithm_defaults();
+            else if (av[k + 1] != "tuned")
+                fail(format("--preset: unknown preset '{}' (known: tuned, "
+                            "spec)",
+                            av[k + 1]),
+                     kExitUsage);
+        }
     size_t i   = 0;
     auto value = [&](const std::string& opt) -> std::string {
         if (i + 1 >= av.size())
@@ -214,6 +230,8 @@ parse_args(int argc, char* argv[])
             fail(format("option {} takes no modifiers", opt), kExitUsage);
         } else if (opt == "-o") {
             a.output = value(opt);
+        } else if (opt == "--preset") {
+            value(opt);  // applied above
         } else if (floats.count(opt)) {
             *floats[opt] = float(parse_number(opt, value(opt)));
         } else if (ints.count(opt)) {
