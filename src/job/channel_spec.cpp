@@ -6,7 +6,7 @@
 #include <OpenImageIO/strutil.h>
 
 namespace zdenoise {
-namespace cli {
+namespace job {
 
 using OIIO::Strutil::fmt::format;
 
@@ -191,5 +191,5 @@ cycles_prefix(const std::vector<std::string>& names, std::string& prefix)
     return false;
 }
 
-}  // namespace cli
+}  // namespace job
 }  // namespace zdenoise

@@ -13,7 +13,7 @@
 #include <OpenImageIO/strutil.h>
 
 namespace zdenoise {
-namespace cli {
+namespace job {
 
 using OIIO::Strutil::fmt::format;
 namespace Filesystem = OIIO::Filesystem;
@@ -45,5 +45,5 @@ write_atomically(const OIIO::ImageBuf& image, const std::string& path,
     return true;
 }
 
-}  // namespace cli
+}  // namespace job
 }  // namespace zdenoise

@@ -10,7 +10,7 @@
 #include <OpenImageIO/imagebuf.h>
 
 namespace zdenoise {
-namespace cli {
+namespace job {
 
 /// Write `image` to `path` through a temporary file in the same folder,
 /// renamed over `path` only once complete. On failure the temporary file is
@@ -19,5 +19,5 @@ bool
 write_atomically(const OIIO::ImageBuf& image, const std::string& path,
                  std::string& error);
 
-}  // namespace cli
+}  // namespace job
 }  // namespace zdenoise

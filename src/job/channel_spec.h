@@ -13,7 +13,7 @@
 #include <OpenImageIO/imageio.h>
 
 namespace zdenoise {
-namespace cli {
+namespace job {
 
 /// What a set of channels is for; decides the channel names looked for.
 enum class Role { Radiance, Albedo, Normal, Depth, ObjectId, Variance };
@@ -43,5 +43,5 @@ select_channels(const std::vector<std::string>& names, const std::string& select
 bool
 cycles_prefix(const std::vector<std::string>& names, std::string& prefix);
 
-}  // namespace cli
+}  // namespace job
 }  // namespace zdenoise

@@ -1,0 +1,60 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// A denoise job as the command line (and the OIIO plugin) describe it:
+// input files with channel selections, filter options. run_job() reads
+// the files, picks the channels (with the Blender Cycles defaults),
+// denoises, and assembles the output image: the noisy input file with its
+// radiance RGB replaced, every other channel and the metadata kept.
+
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imagebuf.h>
+
+#include <zdenoise/zdenoise.h>
+
+namespace zdenoise {
+namespace job {
+
+/// One input file and its channel selection (see channel_spec.h).
+struct InputArg {
+    std::string path;
+    std::string channels;  ///< the :ch= selection; empty = the default
+    bool given = false;
+};
+
+struct Job {
+    InputArg in, albedo, normal, depth, id, variance, half_a, half_b;
+    bool no_normal = false, no_depth = false, no_id = false;
+    FilterOptions filter;
+    int threads = 0;  ///< 0: OIIO's "threads" attribute
+};
+
+struct JobResult {
+    /// The output image, with per-channel write formats of the input and
+    /// the zdenoise metadata set: ready for ImageBuf::write.
+    OIIO::ImageBuf image;
+    FilterStats stats;
+    /// What was read and assumed, one line each (for -v).
+    std::vector<std::string> log;
+    double read_seconds = 0.0, denoise_seconds = 0.0;
+};
+
+/// Run `job`. On failure returns false and a one-line `error` naming the
+/// file, channel or option at fault. Never throws.
+bool
+run_job(const Job& job, JobResult& result, std::string& error);
+
+/// Every input path of the job (to refuse an output that is an input).
+std::vector<std::string>
+input_paths(const Job& job);
+
+/// OIIO error texts can span lines; zdenoise reports one.
+std::string
+one_line(std::string s);
+
+}  // namespace job
+}  // namespace zdenoise
