@@ -34,6 +34,43 @@ struct FitMoments {
     double t[3][3] = {};  ///< per channel: sum w z {1, u, v}
     double n[6] = {};     ///< sum w^2 Vs {1, u, v, uu, uv, vv}
     int count = 0;
+
+    void add(double w, double u, double v, const float* z, double vs)
+    {
+        const double wu = w * u, wv = w * v;
+        s[0] += w;
+        s[1] += wu;
+        s[2] += wv;
+        s[3] += wu * u;
+        s[4] += wu * v;
+        s[5] += wv * v;
+        for (int ch = 0; ch < 3; ++ch) {
+            t[ch][0] += w * z[ch];
+            t[ch][1] += wu * z[ch];
+            t[ch][2] += wv * z[ch];
+        }
+        const double w2v = w * w * vs, w2vu = w2v * u, w2vv = w2v * v;
+        n[0] += w2v;
+        n[1] += w2vu;
+        n[2] += w2vv;
+        n[3] += w2vu * u;
+        n[4] += w2vu * v;
+        n[5] += w2vv * v;
+        ++count;
+    }
+
+    FitMoments& operator+=(const FitMoments& o)
+    {
+        for (int k = 0; k < 6; ++k) {
+            s[k] += o.s[k];
+            n[k] += o.n[k];
+        }
+        for (int ch = 0; ch < 3; ++ch)
+            for (int k = 0; k < 3; ++k)
+                t[ch][k] += o.t[ch][k];
+        count += o.count;
+        return *this;
+    }
 };
 
 /// A solved plane per channel, Z_c = c + a u + b v.
@@ -129,6 +166,8 @@ public:
         , m_guide(in, opt)
         , m_side(2 * opt.r_max + 1)
         , m_g(size_t(m_side) * m_side, 0.0f)
+        , m_fit_weight(size_t(m_side) * m_side, 0.0f)
+        , m_spatial(size_t(opt.r_max) + 1, 0.0f)
     {
     }
 
@@ -136,10 +175,29 @@ public:
     StopReason process(int x0, int y0, int& radius);
 
 private:
-    float& g_at(int dx, int dy)
+    size_t cache_index(int dx, int dy) const
     {
-        return m_g[size_t(dy + m_opt.r_max) * m_side + (dx + m_opt.r_max)];
+        return size_t(dy + m_opt.r_max) * m_side + (dx + m_opt.r_max);
     }
+    float& g_at(int dx, int dy) { return m_g[cache_index(dx, dy)]; }
+    /// Fill m_spatial for radius R: exp(-(dx^2+dy^2)/R^2) = e(dx) e(dy).
+    void set_spatial(int R)
+    {
+        m_spatial.resize(size_t(R) + 1);
+        for (int d = 0; d <= R; ++d)
+            m_spatial[size_t(d)] = std::exp(-float(d * d) / float(R * R));
+    }
+    /// The value term's exponent k |zl - <z>| / |<z>|, clamped so that
+    /// weights never underflow.
+    float value_exponent(float zl, float mean) const
+    {
+        const float am = std::max(std::fabs(mean), float(kEps));
+        return std::min(m_opt.value_k * std::fabs(zl - mean) / am,
+                        kValueClamp);
+    }
+    /// Add the good points of row y, columns [xa, xb], to `m`.
+    void accumulate(FitMoments& m, int R, int y, int xa, int xb, float mean,
+                    double& w2s2) const;
     /// Extend the cached guide weights and point sums to radius R.
     [[gnu::noinline]] void grow_to(int R);
     [[gnu::noinline]] WindowFit fit(int R);
@@ -154,6 +212,10 @@ private:
     GuideWeight m_guide;
     int m_side;
     std::vector<float> m_g;  ///< g(q; p0) over the grown window
+    /// g(q; p0) exp(-sigma(q)) for good fit points, 0 for the others: the
+    /// part of the fit weight that does not change with R.
+    std::vector<float> m_fit_weight;
+    std::vector<float> m_spatial;  ///< exp(-d^2/R^2), d = 0..R
     int m_x0 = 0, m_y0 = 0, m_grown = -1;
     double m_zsum = 0.0;  ///< sum of zl over fit points with g > 0
     int m_zcount  = 0;
@@ -179,10 +241,15 @@ WindowFitter::grow_to(int R)
                 float g = 0.0f;
                 if (cls & kSurface)
                     g = m_guide(x, y);
-                g_at(x - m_x0, y - m_y0) = g;
+                const size_t c = cache_index(x - m_x0, y - m_y0);
+                m_g[c]          = g;
+                m_fit_weight[c] = 0.0f;
                 if (g > 0.0f && (cls & kFitPoint)) {
                     m_zsum += m_in.zl[i];
                     ++m_zcount;
+                    const float sigma = m_in.sigma[i];
+                    if (sigma <= m_opt.sigma_good)
+                        m_fit_weight[c] = g * std::exp(-sigma);
                 }
             }
         }
@@ -191,83 +258,72 @@ WindowFitter::grow_to(int R)
 }
 
 
+void
+WindowFitter::accumulate(FitMoments& m, int R, int y, int xa, int xb,
+                         float mean, double& w2s2) const
+{
+    const int dy       = y - m_y0;
+    const double inv_r = 1.0 / R;
+    const double v     = dy * inv_r;
+    const float ey     = m_spatial[size_t(std::abs(dy))];
+    size_t i           = m_in.index(xa, y);
+    size_t c           = cache_index(xa - m_x0, dy);
+    for (int x = xa; x <= xb; ++x, ++i, ++c) {
+        const float fw = m_fit_weight[c];
+        if (!(fw > 0.0f))
+            continue;
+        const int dx   = x - m_x0;
+        const float w  = fw * m_spatial[size_t(std::abs(dx))] * ey
+                        * std::exp(-value_exponent(m_in.zl[i], mean));
+        const double wd = w;
+        const double s  = m_in.sigma[i];
+        w2s2 += wd * wd * s * s;
+        m.add(wd, dx * inv_r, v, &m_in.z[3 * i], m_in.vs[i]);
+    }
+}
+
+
 WindowFit
 WindowFitter::fit(int R)
 {
     WindowFit wf;
-    wf.radius      = R;
-    wf.mean        = float(m_zsum / m_zcount);
-    const float m  = wf.mean;
-    const float am = std::max(std::fabs(m), float(kEps));
-    const float k  = m_opt.value_k;
-    const float inv_r2 = 1.0f / float(R * R);
-    const double inv_r = 1.0 / R;
-    const ROI& img     = m_in.image;
-    const int ya = std::max(m_y0 - R, img.ybegin);
-    const int yb = std::min(m_y0 + R, img.yend - 1);
-    const int xa = std::max(m_x0 - R, img.xbegin);
-    const int xb = std::min(m_x0 + R, img.xend - 1);
+    wf.radius = R;
+    wf.mean   = float(m_zsum / m_zcount);
+    set_spatial(R);
+    const ROI& img = m_in.image;
+    const int ya   = std::max(m_y0 - R, img.ybegin);
+    const int yb   = std::min(m_y0 + R, img.yend - 1);
+    const int xa   = std::max(m_x0 - R, img.xbegin);
+    const int xb   = std::min(m_x0 + R, img.xend - 1);
 
-    FitMoments mom[5];  // whole, then quadrants 0..3
+    // Nine disjoint cells, each point added once: open quadrants 0-3,
+    // half-axes 4 (+y), 5 (-x), 6 (-y), 7 (+x), and the centre 8. The closed
+    // quadrants and the whole window are sums of cells.
+    FitMoments cell[9];
     double w2s2 = 0.0;
     for (int y = ya; y <= yb; ++y) {
-        const int dy  = y - m_y0;
-        const double v = dy * inv_r;
-        size_t i       = m_in.index(xa, y);
-        for (int x = xa; x <= xb; ++x, ++i) {
-            if (!(m_in.cls[i] & kFitPoint))
-                continue;
-            const int dx  = x - m_x0;
-            const float g = g_at(dx, dy);
-            const float s = m_in.sigma[i];
-            if (!(g > 0.0f) || !(s <= m_opt.sigma_good))
-                continue;
-            const float zl = m_in.zl[i];
-            const float vt = std::min(k * std::fabs(zl - m) / am, kValueClamp);
-            const float w  = g * std::exp(-(vt + s + float(dx * dx + dy * dy) * inv_r2));
-            const double u = dx * inv_r;
-            const double wd = w;
-            const double w2v = wd * wd * m_in.vs[i];
-            w2s2 += wd * wd * double(s) * s;
-            const float* z = &m_in.z[3 * i];
-            auto add = [&](FitMoments& f) {
-                f.s[0] += wd;
-                f.s[1] += wd * u;
-                f.s[2] += wd * v;
-                f.s[3] += wd * u * u;
-                f.s[4] += wd * u * v;
-                f.s[5] += wd * v * v;
-                for (int ch = 0; ch < 3; ++ch) {
-                    const double wz = wd * z[ch];
-                    f.t[ch][0] += wz;
-                    f.t[ch][1] += wz * u;
-                    f.t[ch][2] += wz * v;
-                }
-                f.n[0] += w2v;
-                f.n[1] += w2v * u;
-                f.n[2] += w2v * v;
-                f.n[3] += w2v * u * u;
-                f.n[4] += w2v * u * v;
-                f.n[5] += w2v * v * v;
-                ++f.count;
-            };
-            add(mom[0]);
-            // Closed quadrants: a point on an axis belongs to two (four at
-            // the centre).
-            if (dx >= 0 && dy >= 0)
-                add(mom[1]);
-            if (dx <= 0 && dy >= 0)
-                add(mom[2]);
-            if (dx <= 0 && dy <= 0)
-                add(mom[3]);
-            if (dx >= 0 && dy <= 0)
-                add(mom[4]);
-        }
+        const int dy = y - m_y0;
+        const int left  = dy > 0 ? 1 : (dy < 0 ? 2 : 5);
+        const int mid   = dy > 0 ? 4 : (dy < 0 ? 6 : 8);
+        const int right = dy > 0 ? 0 : (dy < 0 ? 3 : 7);
+        accumulate(cell[left], R, y, xa, m_x0 - 1, wf.mean, w2s2);
+        accumulate(cell[mid], R, y, m_x0, m_x0, wf.mean, w2s2);
+        accumulate(cell[right], R, y, m_x0 + 1, xb, wf.mean, w2s2);
     }
-    wf.whole = solve(mom[0]);
-    for (int q = 0; q < 4; ++q)
-        wf.quadrant[q] = solve(mom[q + 1]);
-    wf.eta = wf.whole.present ? std::sqrt(w2s2) / mom[0].s[0]
+    static const int kQuadrantCells[4][4] = {
+        { 0, 4, 7, 8 }, { 1, 4, 5, 8 }, { 2, 5, 6, 8 }, { 3, 6, 7, 8 }
+    };
+    FitMoments whole;
+    for (const FitMoments& m : cell)
+        whole += m;
+    wf.whole = solve(whole);
+    for (int q = 0; q < 4; ++q) {
+        FitMoments quad;
+        for (int k : kQuadrantCells[q])
+            quad += cell[k];
+        wf.quadrant[q] = solve(quad);
+    }
+    wf.eta = wf.whole.present ? std::sqrt(w2s2) / whole.s[0]
                               : std::numeric_limits<double>::infinity();
     return wf;
 }
@@ -297,12 +353,9 @@ void
 WindowFitter::splat(const WindowFit& w)
 {
     const int R        = w.radius;
-    const float m      = w.mean;
-    const float am     = std::max(std::fabs(m), float(kEps));
-    const float k      = m_opt.value_k;
-    const float inv_r2 = 1.0f / float(R * R);
     const double inv_r = 1.0 / R;
     const float power  = m_opt.quadrant_power;
+    set_spatial(R);
     // Only output pixels receive.
     const int ya = std::max(m_y0 - R, m_out.ybegin);
     const int yb = std::min(m_y0 + R, m_out.yend - 1);
@@ -312,6 +365,7 @@ WindowFitter::splat(const WindowFit& w)
     for (int y = ya; y <= yb; ++y) {
         const int dy   = y - m_y0;
         const double v = dy * inv_r;
+        const float ey = m_spatial[size_t(std::abs(dy))];
         size_t i       = m_in.index(xa, y);
         for (int x = xa; x <= xb; ++x, ++i) {
             const uint8_t cls = m_in.cls[i];
@@ -321,10 +375,9 @@ WindowFitter::splat(const WindowFit& w)
             const float g = g_at(dx, dy);
             if (!(g > 0.0f))
                 continue;
-            float vt = 0.0f;
+            float s = g * m_spatial[size_t(std::abs(dx))] * ey;
             if (cls & kFitPoint)
-                vt = std::min(k * std::fabs(m_in.zl[i] - m) / am, kValueClamp);
-            const double s = g * std::exp(-(vt + float(dx * dx + dy * dy) * inv_r2));
+                s *= std::exp(-value_exponent(m_in.zl[i], w.mean));
             const int qi   = dx >= 0 ? (dy >= 0 ? 0 : 3) : (dy >= 0 ? 1 : 2);
             const Plane& quad = w.quadrant[qi];
             const double u    = dx * inv_r;
