@@ -483,6 +483,10 @@ check_options(ImageBuf& dst, const FilterOptions& o)
         return bad("normal_cut", o.normal_cut, "needs -1 <= normal_cut < 1");
     if (!(o.normal_power > 0.0f) || !std::isfinite(o.normal_power))
         return bad("normal_power", o.normal_power, "needs a finite number > 0");
+    if (o.centre_stride < 1 || o.centre_stride > o.r_min + 1)
+        return bad("centre_stride", o.centre_stride,
+                   "needs 1 <= centre_stride <= r_min + 1 (windows must "
+                   "overlap)");
     if (!finite_nonneg(o.quadrant_power))
         return bad("quadrant_power", o.quadrant_power,
                    "needs a finite number >= 0");
@@ -564,11 +568,28 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         const int ya = std::max(cy0, image.ybegin + k * strip_h);
         const int yb = std::min(cy1, image.ybegin + (k + 1) * strip_h);
         WindowFitter fitter(in, opt, roi, acc, wsum);
+        GuideWeight lattice_guide(in, opt);
         StripStats& st = strip_stats[size_t(s)];
+        const int stride = opt.centre_stride;
         for (int y = ya; y < yb; ++y) {
             for (int x = cx0; x < cx1; ++x) {
                 if (!(in.cls[in.index(x, y)] & kFitPoint))
                     continue;
+                if (stride > 1) {
+                    // Strided centres: a fit point is a centre when it is
+                    // on the lattice, or when its cell's lattice point
+                    // cannot speak for it (not a fit point, or another
+                    // surface), so that no surface is left without windows.
+                    const int lx = x - (x - image.xbegin) % stride;
+                    const int ly = y - (y - image.ybegin) % stride;
+                    if (lx != x || ly != y) {
+                        if (in.cls[in.index(lx, ly)] & kFitPoint) {
+                            lattice_guide.centre(lx, ly);
+                            if (lattice_guide(x, y) > 0.0f)
+                                continue;
+                        }
+                    }
+                }
                 int radius        = 0;
                 StopReason reason = fitter.process(x, y, radius);
                 if (!roi.contains(x, y))

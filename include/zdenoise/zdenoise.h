@@ -77,6 +77,10 @@ struct FilterOptions {
     float normal_power = 4.0f;
     /// Exponent of the quadrant weight w_m = max(Z/Zm, Zm/Z)^quadrant_power.
     float quadrant_power = 8.0f;
+    /// Speed option: fit windows only at every centre_stride-th pixel in x
+    /// and y (plus every fit point whose lattice point is on another
+    /// surface); splatting covers the pixels between. 1 = the exact filter.
+    int centre_stride = 1;
 
     /// Optional progress report with the fraction done in [0,1], called from
     /// one thread at a time (not necessarily the caller's). Not a filter

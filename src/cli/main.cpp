@@ -81,6 +81,8 @@ Filter parameters (docs/FILTER.md):
   --normal-cut X       Normal weight is 0 at or below this dot product (0.5)
   --normal-power X     Normal weight exponent (4)
   --quadrant-power X   Quadrant weight exponent (8)
+  --stride N           Speed option: fit windows at every N-th pixel only
+                       (1 = the exact filter; see docs/PERFORMANCE.md)
 
 General:
   --threads N          Threads (default: all cores); results do not depend
@@ -173,6 +175,7 @@ parse_args(int argc, char* argv[])
             { "--quadrant-power", &a.job.filter.quadrant_power } };
     std::map<std::string, int*> ints = { { "--rmin", &a.job.filter.r_min },
                                          { "--rmax", &a.job.filter.r_max },
+                                         { "--stride", &a.job.filter.centre_stride },
                                          { "--threads", &a.job.threads } };
     for (; i < av.size(); ++i) {
         std::string arg = av[i];
