@@ -493,43 +493,23 @@ check_options(ImageBuf& dst, const FilterOptions& o)
     return true;
 }
 
-}  // namespace
 
 
+/// Totals over the tiles of one call.
+struct FilterTotals {
+    StripStats windows;
+    int64_t pixels = 0, passthrough = 0, nonfinite = 0;
+};
+
+/// Filter the output pixels `roi` (docs/FILTER.md sections 2-7), reading
+/// the inputs over roi plus the halo everything depends on.
 bool
-regression_filter(ImageBuf& dst, const ImageBuf& quotient,
-                  const ImageBuf& albedo, const Guides& guides,
-                  const FilterOptions& options, FilterStats* stats, ROI roi,
-                  int nthreads)
+filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
+            const Guides& guides, const FilterOptions& opt, ROI roi,
+            int nthreads, FilterTotals& totals)
 {
     const char* opname = "regression_filter";
-    if (!prepare_dst(dst, quotient, roi, opname)
-        || !check_input(dst, quotient, opname, "quotient", roi, 3)
-        || !check_input(dst, albedo, opname, "albedo", quotient.roi(), 3)
-        || !check_options(dst, options))
-        return false;
-    struct NamedGuide {
-        const ImageBuf* buf;
-        const char* name;
-        int minchannels;
-    } named[] = { { guides.normal, "normal guide", 3 },
-                  { guides.depth, "depth guide", 1 },
-                  { guides.object_id, "object id guide", 1 },
-                  { guides.variance, "variance guide", 1 },
-                  { guides.half_a, "half buffer A", 3 },
-                  { guides.half_b, "half buffer B", 3 } };
-    for (const NamedGuide& g : named)
-        if (g.buf
-            && !check_input(dst, *g.buf, opname, g.name, quotient.roi(),
-                            g.minchannels))
-            return false;
-    if (!guides.variance && (!guides.half_a != !guides.half_b)) {
-        dst.errorfmt("{}: half buffers need both A and B", opname);
-        return false;
-    }
-
-    const FilterOptions& opt = options;
-    const ROI image          = quotient.roi();
+    const ROI image    = quotient.roi();
     // Everything an output pixel depends on lies within 2*r_max (centres up
     // to r_max away, their windows r_max further) plus the noise estimate's
     // footprint (3x3 residual, 5x5 median, 3x3 smoothing) of 4.
@@ -656,21 +636,87 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         return false;
     }
 
+    for (const StripStats& s : strip_stats) {
+        totals.windows.windows += s.windows;
+        totals.windows.stop_quality += s.stop_quality;
+        totals.windows.stop_size += s.stop_size;
+        totals.windows.stop_edge += s.stop_edge;
+        totals.windows.radius_sum += s.radius_sum;
+    }
+    totals.pixels += int64_t(npix_out);
+    totals.passthrough += passthrough;
+    totals.nonfinite += nonfinite;
+    return true;
+}
+
+}  // namespace
+
+
+bool
+regression_filter(ImageBuf& dst, const ImageBuf& quotient,
+                  const ImageBuf& albedo, const Guides& guides,
+                  const FilterOptions& options, FilterStats* stats, ROI roi,
+                  int nthreads)
+{
+    const char* opname = "regression_filter";
+    if (!prepare_dst(dst, quotient, roi, opname)
+        || !check_input(dst, quotient, opname, "quotient", roi, 3)
+        || !check_input(dst, albedo, opname, "albedo", quotient.roi(), 3)
+        || !check_options(dst, options))
+        return false;
+    struct NamedGuide {
+        const ImageBuf* buf;
+        const char* name;
+        int minchannels;
+    } named[] = { { guides.normal, "normal guide", 3 },
+                  { guides.depth, "depth guide", 1 },
+                  { guides.object_id, "object id guide", 1 },
+                  { guides.variance, "variance guide", 1 },
+                  { guides.half_a, "half buffer A", 3 },
+                  { guides.half_b, "half buffer B", 3 } };
+    for (const NamedGuide& g : named)
+        if (g.buf
+            && !check_input(dst, *g.buf, opname, g.name, quotient.roi(),
+                            g.minchannels))
+            return false;
+    if (!guides.variance && (!guides.half_a != !guides.half_b)) {
+        dst.errorfmt("{}: half buffers need both A and B", opname);
+        return false;
+    }
+
+    // Tiles bound the working memory (about 100 bytes per pixel of a tile
+    // and its halo) whatever the frame size; the result is exactly the
+    // whole-image one (section 8), so the tile size is not a parameter.
+    constexpr int kTile = 1024;
+    const int ntx = (roi.width() + kTile - 1) / kTile;
+    const int nty = (roi.height() + kTile - 1) / kTile;
+    const int ntiles = ntx * nty;
+    FilterTotals totals;
+    FilterOptions tile_opt = options;
+    for (int t = 0; t < ntiles; ++t) {
+        ROI tile(roi.xbegin + (t % ntx) * kTile, 0, roi.ybegin + (t / ntx) * kTile, 0,
+                 roi.zbegin, roi.zend, roi.chbegin, roi.chend);
+        tile.xend = std::min(tile.xbegin + kTile, roi.xend);
+        tile.yend = std::min(tile.ybegin + kTile, roi.yend);
+        if (options.progress)
+            tile_opt.progress = [&](float f) {
+                options.progress((float(t) + f) / float(ntiles));
+            };
+        if (!filter_tile(dst, quotient, albedo, guides, tile_opt, tile,
+                         nthreads, totals))
+            return false;
+    }
     if (stats) {
         FilterStats st;
-        int64_t radius_sum = 0;
-        for (const StripStats& s : strip_stats) {
-            st.windows += s.windows;
-            st.stop_quality += s.stop_quality;
-            st.stop_size += s.stop_size;
-            st.stop_edge += s.stop_edge;
-            radius_sum += s.radius_sum;
-        }
-        st.pixels             = int64_t(npix_out);
-        st.mean_radius        = st.windows ? double(radius_sum) / st.windows
+        st.windows            = totals.windows.windows;
+        st.stop_quality       = totals.windows.stop_quality;
+        st.stop_size          = totals.windows.stop_size;
+        st.stop_edge          = totals.windows.stop_edge;
+        st.mean_radius        = st.windows ? double(totals.windows.radius_sum) / st.windows
                                            : 0.0;
-        st.passthrough_pixels = passthrough;
-        st.nonfinite_pixels   = nonfinite;
+        st.pixels             = totals.pixels;
+        st.passthrough_pixels = totals.passthrough;
+        st.nonfinite_pixels   = totals.nonfinite;
         *stats                = st;
     }
     return true;
