@@ -5,7 +5,6 @@
 // take their values as the following arguments, input options take an
 // optional `:ch=` modifier selecting channels (`--albedo:ch=R,G,B a.exr`).
 
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -27,6 +26,7 @@
 
 #include "../job/atomic_write.h"
 #include "../job/job.h"
+#include "../job/option_names.h"
 
 using namespace OIIO;
 using OIIO::Strutil::fmt::format;
@@ -116,11 +116,8 @@ struct Args {
 double
 parse_number(const std::string& opt, const std::string& value)
 {
-    const char* s = value.c_str();
-    char* end     = nullptr;
-    errno         = 0;
-    double v      = std::strtod(s, &end);
-    if (value.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v))
+    double v = 0.0;
+    if (!job::parse_real(value, v))
         fail(format("{} needs a number, got '{}'", opt, value), kExitUsage);
     return v;
 }
@@ -128,11 +125,11 @@ parse_number(const std::string& opt, const std::string& value)
 int
 parse_int(const std::string& opt, const std::string& value)
 {
-    double v = parse_number(opt, value);
-    if (v != std::floor(v) || std::fabs(v) > 1e6)
+    int v = 0;
+    if (!job::parse_whole(value, v))
         fail(format("{} needs a whole number, got '{}'", opt, value),
              kExitUsage);
-    return int(v);
+    return v;
 }
 
 Args
@@ -144,12 +141,9 @@ parse_args(int argc, char* argv[])
     // stands on the command line.
     for (size_t k = 0; k + 1 < av.size(); ++k)
         if (av[k] == "--preset") {
-            if (av[k + 1] == "spec")
-                a.job.filter = FilterOptions::algorithm_defaults();
-            else if (av[k + 1] != "tuned")
-                fail(format("--preset: unknown preset '{}' (known: tuned, "
-                            "spec)",
-                            av[k + 1]),
+            if (!job::apply_preset(av[k + 1], a.job.filter))
+                fail(format("--preset: unknown preset '{}' (known: {})",
+                            av[k + 1], job::preset_names()),
                      kExitUsage);
         }
     size_t i   = 0;
@@ -162,21 +156,14 @@ parse_args(int argc, char* argv[])
         = { { "--in", &a.job.in },       { "--albedo", &a.job.albedo },
             { "--normal", &a.job.normal }, { "--depth", &a.job.depth },
             { "--id", &a.job.id },       { "--variance", &a.job.variance } };
-    std::map<std::string, float*> floats
-        = { { "--eta", &a.job.filter.eta_target },
-            { "--edge-k", &a.job.filter.edge_k },
-            { "--tau-min", &a.job.filter.tau_min },
-            { "--value-k", &a.job.filter.value_k },
-            { "--sigma-good", &a.job.filter.sigma_good },
-            { "--albedo-eps", &a.job.filter.albedo_eps },
-            { "--depth-tol", &a.job.filter.depth_tolerance },
-            { "--normal-cut", &a.job.filter.normal_cut },
-            { "--normal-power", &a.job.filter.normal_power },
-            { "--quadrant-power", &a.job.filter.quadrant_power } };
-    std::map<std::string, int*> ints = { { "--rmin", &a.job.filter.r_min },
-                                         { "--rmax", &a.job.filter.r_max },
-                                         { "--stride", &a.job.filter.centre_stride },
-                                         { "--threads", &a.job.threads } };
+    std::map<std::string, float*> floats;
+    std::map<std::string, int*> ints = { { "--threads", &a.job.threads } };
+    for (const job::FilterOptionName& o : job::filter_option_names()) {
+        if (o.real)
+            floats[std::string("--") + o.name] = &(a.job.filter.*o.real);
+        else
+            ints[std::string("--") + o.name] = &(a.job.filter.*o.whole);
+    }
     for (; i < av.size(); ++i) {
         std::string arg = av[i];
         // oiiotool-style modifiers: --albedo:ch=R,G,B
