@@ -19,18 +19,20 @@ using OIIO::Strutil::fmt::format;
 namespace Filesystem = OIIO::Filesystem;
 
 bool
-write_atomically(const OIIO::ImageBuf& image, const std::string& path,
+write_atomically(const std::string& path,
+                 const std::function<bool(const std::string& temporary_path,
+                                          std::string& why)>& write,
                  std::string& error)
 {
     // Same folder (so the rename is atomic), hidden name, same extension (so
-    // that the format is chosen from it).
+    // that an image format is chosen from it).
     std::string dir  = Filesystem::parent_path(path);
     std::string ext  = Filesystem::extension(path);
     std::string stem = Filesystem::filename(path);
     std::string tmp  = format("{}{}.{}.zdenoise-tmp-{}{}",
                               dir, dir.empty() ? "" : "/", stem, ::getpid(), ext);
-    if (!image.write(tmp)) {
-        std::string why = image.geterror();
+    std::string why;
+    if (!write(tmp, why)) {
         Filesystem::remove(tmp);
         if (why.empty())
             why = "unknown error";
@@ -43,6 +45,22 @@ write_atomically(const OIIO::ImageBuf& image, const std::string& path,
         return false;
     }
     return true;
+}
+
+
+bool
+write_atomically(const OIIO::ImageBuf& image, const std::string& path,
+                 std::string& error)
+{
+    return write_atomically(
+        path,
+        [&](const std::string& tmp, std::string& why) {
+            if (image.write(tmp))
+                return true;
+            why = image.geterror();
+            return false;
+        },
+        error);
 }
 
 }  // namespace job

@@ -5,6 +5,7 @@
 
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include <OpenImageIO/imagebuf.h>
@@ -17,6 +18,14 @@ namespace job {
 /// removed, any existing `path` is untouched, and `error` says why.
 bool
 write_atomically(const OIIO::ImageBuf& image, const std::string& path,
+                 std::string& error);
+
+/// Write `path` the same way, with `write(temporary_path, why)` writing the
+/// file's contents (and saying why not when it returns false).
+bool
+write_atomically(const std::string& path,
+                 const std::function<bool(const std::string& temporary_path,
+                                          std::string& why)>& write,
                  std::string& error);
 
 }  // namespace job
