@@ -27,6 +27,7 @@
 #include "../job/atomic_write.h"
 #include "../job/job.h"
 #include "../job/option_names.h"
+#include "../job/recipe.h"
 
 using namespace OIIO;
 using OIIO::Strutil::fmt::format;
@@ -40,6 +41,7 @@ constexpr int kExitUsage = 2;
 const char* kUsage = R"(zdenoise )" ZDENOISE_VERSION_STRING R"( -- denoise Monte Carlo renders (Zhdanov, Ershov & Voloboy 2018)
 
 Usage: zdenoise --in NOISY -o OUTPUT [options]
+       zdenoise --in NOISY --write-recipe RECIPE.zdn [options]
 
 Inputs (each FILE may take a channel selection, oiiotool style:
 --albedo:ch=R,G,B FILE, or a layer name: --albedo:ch="Denoising Albedo" FILE):
@@ -63,6 +65,10 @@ Output:
                        each channel in its input pixel type. Written to a
                        temporary file, then renamed.
   --force              Allow the output to replace one of the inputs.
+  --write-recipe FILE  Instead of denoising, write a recipe (.zdn) for these
+                       options: any OpenImageIO program with the zdenoise
+                       plugin reads it as the denoised image
+                       (share/zdn-format.md).
 
 Filter parameters (docs/FILTER.md):
   --preset NAME        Start from a parameter set: 'tuned' (default, tuned on
@@ -108,7 +114,9 @@ fail(const std::string& message, int code = kExitError)
 
 struct Args {
     job::Job job;
+    std::string preset = "tuned";
     std::string output;
+    std::string recipe;  ///< --write-recipe
     bool force   = false;
     bool verbose = false;
 };
@@ -141,9 +149,10 @@ parse_args(int argc, char* argv[])
     // stands on the command line.
     for (size_t k = 0; k + 1 < av.size(); ++k)
         if (av[k] == "--preset") {
-            if (!job::apply_preset(av[k + 1], a.job.filter))
+            a.preset = av[k + 1];
+            if (!job::apply_preset(a.preset, a.job.filter))
                 fail(format("--preset: unknown preset '{}' (known: {})",
-                            av[k + 1], job::preset_names()),
+                            a.preset, job::preset_names()),
                      kExitUsage);
         }
     size_t i   = 0;
@@ -199,6 +208,8 @@ parse_args(int argc, char* argv[])
             fail(format("option {} takes no modifiers", opt), kExitUsage);
         } else if (opt == "-o") {
             a.output = value(opt);
+        } else if (opt == "--write-recipe") {
+            a.recipe = value(opt);
         } else if (opt == "--preset") {
             value(opt);  // applied above
         } else if (floats.count(opt)) {
@@ -222,8 +233,12 @@ parse_args(int argc, char* argv[])
     }
     if (!a.job.in.given)
         fail("no input: give --in FILE (see zdenoise --help)", kExitUsage);
-    if (a.output.empty())
+    if (a.output.empty() && a.recipe.empty())
         fail("no output: give -o FILE (see zdenoise --help)", kExitUsage);
+    if (!a.output.empty() && !a.recipe.empty())
+        fail("give either -o FILE (denoise) or --write-recipe FILE (write a "
+             "recipe to denoise later), not both",
+             kExitUsage);
     if (a.job.threads < 0)
         fail(format("--threads needs a number >= 0, got {}", a.job.threads),
              kExitUsage);
@@ -245,6 +260,14 @@ int
 run(int argc, char* argv[])
 {
     Args a = parse_args(argc, argv);
+    std::string err;
+    if (!a.recipe.empty()) {
+        if (!job::write_recipe(a.job, a.preset, a.recipe, err))
+            fail(err);
+        if (a.verbose)
+            printf("zdenoise: wrote recipe '%s'\n", a.recipe.c_str());
+        return 0;
+    }
     if (a.job.threads > 0)
         OIIO::attribute("threads", a.job.threads);
     Timer total;
@@ -273,7 +296,6 @@ run(int argc, char* argv[])
         };
     }
     job::JobResult result;
-    std::string err;
     const bool ok = job::run_job(a.job, result, err);
     if (a.verbose)
         for (const std::string& line : result.log)

@@ -1,0 +1,63 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Recipes: a denoise job as a small JSON file (`.zdn`) that the OIIO plugin
+// reads as the denoised image. The format is documented in
+// share/zdn-format.md; `zdenoise --write-recipe` writes one.
+
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "job.h"
+
+namespace zdenoise {
+namespace job {
+
+/// The file name extension of recipes (without the dot).
+constexpr const char* kRecipeExtension = "zdn";
+
+/// The version of the format this code reads and writes: the value of the
+/// recipe's "zdenoise-recipe" key.
+constexpr int kRecipeFormatVersion = 1;
+
+/// Does `filename` (which may carry REST-style arguments, `a.zdn?eta=0.03`)
+/// name a file that looks like a recipe: small, a JSON object with a
+/// "zdenoise-recipe" key? Reads the file but does not check the job.
+bool
+looks_like_recipe(const std::string& filename);
+
+/// Read the recipe `filename` into `job`. REST-style arguments after a `?`
+/// (`shot.zdn?threads=2&eta=0.03`) override the recipe's keys of the same
+/// names. Input paths are resolved against the recipe's folder. On failure
+/// returns false and a one-line `error` naming the recipe and the problem.
+/// Never throws.
+bool
+read_recipe(const std::string& filename, Job& job, std::string& error);
+
+/// Parse recipe text (`name` is used in messages; relative input paths are
+/// resolved against `folder`) with `overrides` (key -> text, as REST
+/// arguments give them) applied. Never throws.
+bool
+parse_recipe(const std::string& text, const std::string& name,
+             const std::string& folder,
+             const std::map<std::string, std::string>& overrides, Job& job,
+             std::string& error);
+
+/// The recipe text for `job` whose filter options started from `preset`,
+/// with input paths relative to `folder` (absolute when they are on
+/// another root). Every filter option is written, so the recipe does not
+/// change meaning if the defaults do.
+std::string
+recipe_text(const Job& job, const std::string& preset,
+            const std::string& folder);
+
+/// Write the recipe for `job` to `path` (through a temporary file; paths
+/// relative to the recipe's folder). Refuses inputs that are recipes.
+bool
+write_recipe(const Job& job, const std::string& preset,
+             const std::string& path, std::string& error);
+
+}  // namespace job
+}  // namespace zdenoise
