@@ -1,0 +1,242 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// The OpenImageIO plugin: any OIIO program reads a zdenoise recipe (.zdn,
+// share/zdn-format.md) as the image `zdenoise` would write for it. open()
+// runs the job once; the scanlines are then served from memory in the
+// output's per-channel pixel types, so that a program writing what it
+// reads writes the same file `zdenoise` does.
+//
+// The format is named "zdn", not "zdenoise": OIIO's writers drop metadata
+// whose prefix before ':' is the name of another format, and zdenoise's
+// output carries "zdenoise:version" and "zdenoise:parameters".
+
+#include <cstring>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imageio.h>
+#include <OpenImageIO/strutil.h>
+
+#include <zdenoise/version.h>
+
+#include "../src/job/job.h"
+#include "../src/job/recipe.h"
+
+using namespace OIIO;
+namespace job = zdenoise::job;
+
+namespace {
+
+/// Recipes in the making on this thread. An input that is a recipe in
+/// disguise (say `x.exr` holding JSON) reaches this reader again through
+/// OIIO's "try every reader" fallback; refusing it ends the recursion.
+thread_local int recipes_being_read = 0;
+
+struct ReadingRecipe {
+    ReadingRecipe() { ++recipes_being_read; }
+    ~ReadingRecipe() { --recipes_being_read; }
+};
+
+
+class ZdnInput final : public ImageInput {
+public:
+    // OIIO constructs one of each reader while cataloguing formats:
+    // nothing happens here.
+    ZdnInput() = default;
+    ~ZdnInput() override { close(); }
+
+    const char* format_name() const override { return "zdn"; }
+
+    int supports(string_view feature) const override
+    {
+        // The output carries the noisy input's metadata, whatever it is.
+        return feature == "arbitrary_metadata";
+    }
+
+    bool valid_file(const std::string& filename) const override
+    {
+        try {
+            return job::looks_like_recipe(filename);
+        } catch (...) {
+            return false;  // no exception may reach the host program
+        }
+    }
+
+    bool open(const std::string& name, ImageSpec& newspec) override
+    {
+        try {
+            return open_recipe(name, newspec);
+        } catch (const std::exception& e) {  // e.g. out of memory
+            close();
+            errorfmt("recipe '{}': {}", name, e.what());
+            return false;
+        }
+    }
+
+    bool open(const std::string& name, ImageSpec& newspec,
+              const ImageSpec& /*config*/) override
+    {
+        return open(name, newspec);
+    }
+
+    bool close() override
+    {
+        m_pixels = std::vector<unsigned char>();
+        m_spec   = ImageSpec();
+        return true;
+    }
+
+    bool read_native_scanline(int subimage, int miplevel, int y, int z,
+                              void* data) override
+    {
+        return read_native_scanlines(subimage, miplevel, y, y + 1, z, 0,
+                                     m_spec.nchannels, data);
+    }
+
+    bool read_native_scanlines(int subimage, int miplevel, int ybegin,
+                               int yend, int z, void* data) override
+    {
+        return read_native_scanlines(subimage, miplevel, ybegin, yend, z, 0,
+                                     m_spec.nchannels, data);
+    }
+
+    bool read_native_scanlines(int subimage, int miplevel, int ybegin,
+                               int yend, int z, int chbegin, int chend,
+                               void* data) override;
+
+private:
+    bool open_recipe(const std::string& name, ImageSpec& newspec);
+
+    /// The denoised image in its native layout: whole scanlines, each
+    /// pixel's channels in their own pixel types (m_spec.channelformats).
+    std::vector<unsigned char> m_pixels;
+};
+
+
+bool
+ZdnInput::open_recipe(const std::string& name, ImageSpec& newspec)
+{
+    close();
+    if (recipes_being_read > 0) {
+        errorfmt("recipe '{}': a recipe cannot be the input of another "
+                 "recipe",
+                 name);
+        return false;
+    }
+    ReadingRecipe guard;
+
+    job::Job recipe;
+    std::string error;
+    if (!job::read_recipe(name, recipe, error)) {
+        errorfmt("{}", error);
+        return false;
+    }
+    // Threads: the recipe's (or the file name's ?threads=N), else this
+    // reader's policy, else (0) OIIO's global "threads" attribute.
+    if (recipe.threads == 0)
+        recipe.threads = threads();
+
+    job::JobResult result;
+    if (!job::run_job(recipe, result, error)) {
+        errorfmt("recipe '{}': {}", name, error);
+        return false;
+    }
+
+    // The spec of the file zdenoise would write: run_job's image with the
+    // pixel types it is written in (those of the noisy input file), as
+    // scanlines.
+    const ImageBuf& image  = result.image;
+    const ImageSpec& input = image.nativespec();
+    ImageSpec spec         = image.spec();
+    spec.format            = input.format;
+    spec.channelformats    = input.channelformats;
+    spec.tile_width = spec.tile_height = spec.tile_depth = 0;
+
+    // Convert each channel once to its pixel type, interleaved as OIIO's
+    // native scanlines are.
+    const stride_t pixel_bytes    = stride_t(spec.pixel_bytes(true));
+    const stride_t scanline_bytes = stride_t(spec.scanline_bytes(true));
+    std::vector<unsigned char> pixels(spec.image_bytes(true));
+    const ROI all = image.roi();
+    stride_t offset = 0;
+    for (int c = 0; c < spec.nchannels; ++c) {
+        const TypeDesc type = spec.channelformat(c);
+        ROI channel         = all;
+        channel.chbegin     = c;
+        channel.chend       = c + 1;
+        if (!image.get_pixels(channel, type, pixels.data() + offset,
+                              pixel_bytes, scanline_bytes)) {
+            errorfmt("recipe '{}': {}", name,
+                     job::one_line(image.geterror()));
+            return false;
+        }
+        offset += stride_t(type.size());
+    }
+    m_spec   = spec;
+    m_pixels = std::move(pixels);
+    newspec  = m_spec;
+    return true;
+}
+
+
+bool
+ZdnInput::read_native_scanlines(int subimage, int miplevel, int ybegin,
+                                     int yend, int z, int chbegin, int chend,
+                                     void* data)
+{
+    if (m_pixels.empty()) {
+        errorfmt("zdenoise: no recipe is open");
+        return false;
+    }
+    if (subimage != 0 || miplevel != 0 || z < m_spec.z
+        || z >= m_spec.z + std::max(m_spec.depth, 1) || ybegin < m_spec.y
+        || yend > m_spec.y + m_spec.height || ybegin > yend || chbegin < 0
+        || chend > m_spec.nchannels || chbegin >= chend) {
+        errorfmt("zdenoise: scanlines {}-{}, channels {}-{}, subimage {} "
+                 "level {} are outside the image",
+                 ybegin, yend, chbegin, chend, subimage, miplevel);
+        return false;
+    }
+    const size_t pixel_bytes    = m_spec.pixel_bytes(true);
+    const size_t scanline_bytes = m_spec.scanline_bytes(true);
+    const size_t first          = m_spec.pixel_bytes(0, chbegin, true);
+    const size_t wanted         = m_spec.pixel_bytes(chbegin, chend, true);
+    const size_t plane          = scanline_bytes * size_t(m_spec.height);
+    const unsigned char* src    = m_pixels.data() + plane * size_t(z - m_spec.z)
+                               + scanline_bytes * size_t(ybegin - m_spec.y);
+    auto* dst = static_cast<unsigned char*>(data);
+    if (wanted == pixel_bytes) {
+        std::memcpy(dst, src, scanline_bytes * size_t(yend - ybegin));
+        return true;
+    }
+    const size_t pixels = size_t(m_spec.width) * size_t(yend - ybegin);
+    for (size_t p = 0; p < pixels; ++p)
+        std::memcpy(dst + p * wanted, src + p * pixel_bytes + first, wanted);
+    return true;
+}
+
+}  // namespace
+
+
+OIIO_PLUGIN_EXPORTS_BEGIN
+
+OIIO_EXPORT int zdn_imageio_version = OIIO_PLUGIN_VERSION;
+
+OIIO_EXPORT const char*
+zdn_imageio_library_version()
+{
+    return "zdenoise " ZDENOISE_VERSION_STRING;
+}
+
+OIIO_EXPORT ImageInput*
+zdn_input_imageio_create()
+{
+    return new ZdnInput;
+}
+
+OIIO_EXPORT const char* zdn_input_extensions[] = { "zdn", nullptr };
+
+OIIO_PLUGIN_EXPORTS_END
