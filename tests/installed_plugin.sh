@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Install the build tree into a scratch prefix; the installed plugin, found
+# through OIIO_LIBRARY_PATH alone, must read a recipe written by the
+# installed zdenoise (its RPATH must find the installed libzdenoise).
+set -euo pipefail
+build_dir=$1 source_dir=$2
+command -v iinfo >/dev/null || { echo "iinfo not found (openimageio-tools)"; exit 77; }
+scratch=$(mktemp -d)
+trap 'rm -rf "$scratch"' EXIT
+cmake --install "$build_dir" --prefix "$scratch/prefix" >/dev/null
+plugin=$(find "$scratch/prefix" -name zdn.imageio.so)
+[ -n "$plugin" ] || { echo "zdn.imageio.so not installed"; exit 1; }
+"$scratch/prefix/bin/zdenoise" --in "$source_dir/share/samples/cornell_textured_spp16_crop.exr" \
+    --write-recipe "$scratch/shot.zdn"
+info=$(env -u LD_LIBRARY_PATH OIIO_LIBRARY_PATH="$(dirname "$plugin")" iinfo "$scratch/shot.zdn")
+echo "$info"
+grep -q "96 x   96, 54 channel, float zdn" <<<"$info"

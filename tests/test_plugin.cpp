@@ -1,0 +1,408 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// The OIIO plugin as a user meets it: Debian's oiiotool, iinfo, idiff and
+// Python module, with OIIO_LIBRARY_PATH at the build's plugin folder,
+// reading recipes (.zdn) as the image `zdenoise` writes; broken recipes
+// failing through OIIO's error mechanism with a message naming the recipe
+// and the problem, never a crash or a hang.
+
+#include <algorithm>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+
+#include <zdenoise/version.h>
+
+using namespace OIIO;
+
+namespace {
+
+const std::string kCli       = ZDENOISE_CLI;
+const std::string kSourceDir = ZDENOISE_SOURCE_DIR;
+const std::string kPluginDir = ZDENOISE_PLUGIN_DIR;
+const std::string kOiiotool  = ZDENOISE_OIIOTOOL;
+const std::string kIinfo     = ZDENOISE_IINFO;
+const std::string kIdiff     = ZDENOISE_IDIFF;
+const std::string kPython    = ZDENOISE_SYSTEM_PYTHON;
+const std::string kSample    = kSourceDir
+                            + "/share/samples/cornell_textured_spp16_crop.exr";
+
+/// A host program that hangs is killed after this many seconds (status 124).
+constexpr int kTimeoutSeconds = 120;
+
+struct RunResult {
+    int status = -1;  ///< exit status; -1 when killed by a signal
+    std::string out, err;
+};
+
+std::string
+slurp(const std::string& path)
+{
+    std::ifstream f(path);
+    std::stringstream s;
+    s << f.rdbuf();
+    return s.str();
+}
+
+std::string
+quoted(const std::string& s)
+{
+    std::string q = "'";
+    for (char c : s)
+        q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+class PluginTest : public ::testing::Test {
+protected:
+    void SetUp() override
+    {
+        for (const std::string* program : { &kOiiotool, &kIinfo, &kIdiff })
+            if (program->empty())
+                GTEST_SKIP() << "oiiotool, iinfo or idiff not found "
+                                "(Debian package openimageio-tools)";
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        dir = Filesystem::temp_directory_path() + "/zdenoise_plugin_"
+              + info->name() + "_" + std::to_string(::getpid());
+        Filesystem::remove_all(dir);
+        Filesystem::create_directory(dir);
+    }
+    void TearDown() override
+    {
+        if (!dir.empty())
+            Filesystem::remove_all(dir);
+    }
+
+    std::string path(const std::string& name) const { return dir + "/" + name; }
+
+    /// Run a shell command line (arguments already quoted) with OIIO's
+    /// plugin search path at the build's plugin folder.
+    RunResult run(const std::string& command) const
+    {
+        RunResult r;
+        std::string cmd = "OIIO_LIBRARY_PATH=" + quoted(kPluginDir) + " timeout "
+                          + std::to_string(kTimeoutSeconds) + " sh -c "
+                          + quoted(command) + " >" + quoted(path("stdout.txt"))
+                          + " 2>" + quoted(path("stderr.txt"));
+        int rc   = std::system(cmd.c_str());
+        r.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+        r.out    = slurp(path("stdout.txt"));
+        r.err    = slurp(path("stderr.txt"));
+        Filesystem::remove(path("stdout.txt"));
+        Filesystem::remove(path("stderr.txt"));
+        return r;
+    }
+
+    RunResult zdenoise(const std::string& args) const
+    {
+        return run(quoted(kCli) + " " + args);
+    }
+
+    RunResult oiiotool(const std::string& args) const
+    {
+        return run(quoted(kOiiotool) + " " + args);
+    }
+
+    /// Run a Python script with Debian's python3 and its OpenImageIO module.
+    RunResult python(const std::string& script) const
+    {
+        std::ofstream(path("script.py")) << "import OpenImageIO as oiio\n" << script;
+        return run(quoted(kPython) + " " + quoted(path("script.py")));
+    }
+
+    void write_text(const std::string& name, const std::string& text) const
+    {
+        std::ofstream f(path(name));
+        f << text;
+    }
+
+    /// idiff finds the two images identical (every channel, every pixel).
+    void expect_identical(const std::string& a, const std::string& b) const
+    {
+        RunResult r = run(quoted(kIdiff) + " " + quoted(a) + " " + quoted(b));
+        EXPECT_EQ(r.status, 0) << "idiff " << a << " " << b << ":\n" << r.out << r.err;
+    }
+
+    std::string dir;
+};
+
+/// A recipe for the bundled sample with the given extra JSON lines.
+std::string
+sample_recipe(const std::string& extra = "")
+{
+    return "{\n  \"zdenoise-recipe\": 1,\n  \"in\": \"" + kSample + "\""
+           + (extra.empty() ? "" : ",\n  " + extra) + "\n}\n";
+}
+
+/// Named metadata of a file, as iinfo would list it.
+std::map<std::string, std::string>
+metadata(const std::string& file)
+{
+    std::map<std::string, std::string> m;
+    auto in = ImageInput::open(file);
+    if (!in)
+        return m;
+    for (const ParamValue& p : in->spec().extra_attribs)
+        m[p.name().string()] = p.get_string();
+    return m;
+}
+
+}  // namespace
+
+
+TEST_F(PluginTest, OiiotoolReadsRecipeAsTheImageZdenoiseWrites)
+{
+    write_text("shot.zdn", sample_recipe());
+    RunResult r = zdenoise("--in " + quoted(kSample) + " -o " + quoted(path("cli.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = oiiotool(quoted(path("shot.zdn")) + " -o " + quoted(path("plugin.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    expect_identical(path("cli.exr"), path("plugin.exr"));
+
+    // Same channels, pixel types and metadata (oiiotool stamps its own
+    // Software and history), including zdenoise's own: the plugin on the
+    // search path must not make OIIO's writers drop "zdenoise:" metadata.
+    auto cli = ImageInput::open(path("cli.exr")), plugin = ImageInput::open(path("plugin.exr"));
+    ASSERT_TRUE(cli && plugin);
+    EXPECT_EQ(plugin->spec().channelnames, cli->spec().channelnames);
+    EXPECT_EQ(plugin->spec().format, cli->spec().format);
+    EXPECT_EQ(plugin->spec().channelformats, cli->spec().channelformats);
+    auto from_cli = metadata(path("cli.exr")), from_plugin = metadata(path("plugin.exr"));
+    for (const auto& [name, value] : from_cli) {
+        if (name != "Software" && name != "Exif:ImageHistory") {
+            EXPECT_EQ(from_plugin[name], value) << "metadata " << name;
+        }
+    }
+    EXPECT_EQ(from_cli["zdenoise:version"], ZDENOISE_VERSION_STRING);
+    EXPECT_NE(from_plugin["zdenoise:parameters"], "");
+}
+
+
+TEST_F(PluginTest, KeepsEachChannelsPixelType)
+{
+    // Half beauty and float depth in one file; a float albedo.
+    ImageSpec spec(24, 20, 5, TypeFloat);
+    spec.channelnames = { "R", "G", "B", "A", "depth.Z" };
+    ImageBuf noisy(spec);
+    ImageBufAlgo::noise(noisy, "uniform", 0.2f, 0.6f, true, 7);
+    noisy.set_write_format({ TypeHalf, TypeHalf, TypeHalf, TypeHalf, TypeFloat });
+    ASSERT_TRUE(noisy.write(path("mixed.exr"))) << noisy.geterror();
+    noisy.set_write_format(TypeHalf);
+    ASSERT_TRUE(noisy.write(path("half.exr"))) << noisy.geterror();
+    ImageBuf albedo(ImageSpec(24, 20, 3, TypeFloat));
+    ImageBufAlgo::fill(albedo, { 0.5f, 0.4f, 0.3f });
+    ASSERT_TRUE(albedo.write(path("albedo.exr"))) << albedo.geterror();
+
+    for (const std::string name : { "mixed", "half" }) {
+        SCOPED_TRACE(name);
+        write_text(name + ".zdn", "{\"zdenoise-recipe\": 1, \"in\": \"" + name
+                                      + ".exr\", \"albedo\": {\"path\": \"albedo.exr\", "
+                                        "\"channels\": \"R,G,B\"}}");
+        RunResult r = zdenoise("--in " + quoted(path(name + ".exr")) + " --albedo "
+                               + quoted(path("albedo.exr")) + " -o "
+                               + quoted(path(name + "_cli.exr")));
+        ASSERT_EQ(r.status, 0) << r.err;
+        r = run(quoted(kIinfo) + " " + quoted(path(name + ".zdn")));
+        EXPECT_NE(r.out.find(name == "mixed" ? "half/half/half/half/float zdn" : "half zdn"),
+                  std::string::npos)
+            << r.out << r.err;
+        r = oiiotool(quoted(path(name + ".zdn")) + " -o " + quoted(path(name + "_oiiotool.exr")));
+        ASSERT_EQ(r.status, 0) << r.err;
+        expect_identical(path(name + "_cli.exr"), path(name + "_oiiotool.exr"));
+    }
+    // oiiotool 2.4 writes mixed-type inputs (EXR or recipe alike) as float,
+    // but a uniform type as that type.
+    auto half = ImageInput::open(path("half_oiiotool.exr"));
+    ASSERT_TRUE(half);
+    EXPECT_EQ(half->spec().format, TypeHalf) << "half input must give half output";
+
+    // ImageBuf::write keeps each channel's type.
+    if (kPython.empty())
+        return;
+    RunResult r = python("oiio.ImageBuf(" + quoted(path("mixed.zdn")) + ").write("
+                         + quoted(path("mixed_python.exr")) + ")\n");
+    ASSERT_EQ(r.status, 0) << r.err;
+    expect_identical(path("mixed_cli.exr"), path("mixed_python.exr"));
+    auto mixed = ImageInput::open(path("mixed_python.exr"));
+    ASSERT_TRUE(mixed);
+    EXPECT_EQ(mixed->spec().channelformat(0), TypeHalf);
+    EXPECT_EQ(mixed->spec().channelformat(4), TypeFloat) << "depth.Z must stay float";
+}
+
+
+TEST_F(PluginTest, InputPathsAreRelativeToTheRecipesFolder)
+{
+    Filesystem::create_directory(path("renders"));
+    Filesystem::create_directory(path("recipes"));
+    ASSERT_TRUE(Filesystem::copy(kSample, path("renders/shot.exr")));
+    write_text("recipes/shot.zdn",
+               R"({"zdenoise-recipe": 1, "in": "../renders/shot.exr"})");
+    RunResult r = zdenoise("--in " + quoted(kSample) + " -o " + quoted(path("cli.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    // Run from another folder.
+    r = run("cd / && " + quoted(kOiiotool) + " " + quoted(path("recipes/shot.zdn")) + " -o "
+            + quoted(path("plugin.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    expect_identical(path("cli.exr"), path("plugin.exr"));
+}
+
+
+TEST_F(PluginTest, FileNameArgumentsOverrideTheRecipe)
+{
+    write_text("shot.zdn", sample_recipe("\"eta\": 0.02"));
+    RunResult r = zdenoise("--in " + quoted(kSample) + " --eta 0.05 -o "
+                           + quoted(path("cli.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = oiiotool(quoted(path("shot.zdn") + "?eta=0.05&threads=1") + " -o "
+                 + quoted(path("plugin.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    expect_identical(path("cli.exr"), path("plugin.exr"));
+    EXPECT_NE(metadata(path("plugin.exr"))["zdenoise:parameters"].find("eta=0.05"),
+              std::string::npos);
+
+    // ?preset=spec replaces the recipe's filter options by the preset's.
+    r = zdenoise("--in " + quoted(kSample) + " --preset spec -o " + quoted(path("spec.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = oiiotool(quoted(path("shot.zdn") + "?preset=spec") + " -o "
+                 + quoted(path("plugin_spec.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    expect_identical(path("spec.exr"), path("plugin_spec.exr"));
+}
+
+
+TEST_F(PluginTest, IinfoPrintsTheSpec)
+{
+    write_text("shot.zdn", sample_recipe());
+    RunResult r = run(quoted(kIinfo) + " -v " + quoted(path("shot.zdn")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    for (const char* expected : { "96 x   96, 54 channel, float zdn",
+                                  "ViewLayer.Combined.R", "ViewLayer.DiffCol.G",
+                                  "cryptomatte/542cafa/manifest", "zdenoise:version",
+                                  "zdenoise:parameters" })
+        EXPECT_NE(r.out.find(expected), std::string::npos)
+            << "iinfo -v lacks '" << expected << "':\n" << r.out;
+}
+
+
+TEST_F(PluginTest, PythonImageBufOpensRecipe)
+{
+    if (kPython.empty())
+        GTEST_SKIP() << "/usr/bin/python3 not found";
+    write_text("shot.zdn", sample_recipe());
+    RunResult r = zdenoise("--in " + quoted(kSample) + " -o " + quoted(path("cli.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = python("recipe = oiio.ImageBuf(" + quoted(path("shot.zdn")) + ")\n"
+               "cli = oiio.ImageBuf(" + quoted(path("cli.exr")) + ")\n"
+               "spec = recipe.spec()\n"
+               "assert not recipe.has_error, recipe.geterror()\n"
+               "cmp = oiio.ImageBufAlgo.compare(recipe, cli, 0.0, 0.0)\n"
+               "print(spec.width, spec.height, spec.nchannels, recipe.file_format_name,\n"
+               "      cmp.nfail, cmp.maxerror)\n");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.out, "96 96 54 zdn 0 0.0\n") << r.err;
+}
+
+
+TEST_F(PluginTest, BrokenRecipesAreOiioErrorsNotCrashes)
+{
+    write_text("other.zdn", sample_recipe());
+    struct Case {
+        const char* name;
+        std::string text;
+        std::string problem;  ///< expected in the message
+    } cases[] = {
+        { "malformed.zdn", "{\"zdenoise-recipe\": 1, \"in\": ", "not valid JSON" },
+        { "not_a_recipe.zdn", "{\"in\": \"x.exr\"}", "not a zdenoise recipe" },
+        { "missing_input.zdn", "{\"zdenoise-recipe\": 1, \"in\": \"nope.exr\"}",
+          "nope.exr': no such file" },
+        { "missing_channel.zdn",
+          sample_recipe("\"albedo\": {\"path\": \"" + kSample
+                        + "\", \"channels\": \"Diffuse.R,Diffuse.G,Diffuse.B\"}"),
+          "Diffuse.R" },
+        { "typo.zdn", sample_recipe("\"etaa\": 0.03"), "unknown key \"etaa\"" },
+        { "bad_value.zdn", sample_recipe("\"rmax\": \"big\""), "\"rmax\" must be a number" },
+        { "bad_filter.zdn", sample_recipe("\"rmin\": 5, \"rmax\": 3"), "r_max" },
+        { "recursive.zdn", "{\"zdenoise-recipe\": 1, \"in\": \"other.zdn\"}",
+          "itself a recipe" },
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.name);
+        write_text(c.name, c.text);
+        RunResult r = oiiotool(quoted(path(c.name)) + " -o " + quoted(path("out.exr")));
+        EXPECT_EQ(r.status, 1) << "oiiotool must fail cleanly:\n" << r.err;
+        EXPECT_NE(r.err.find(std::string("recipe '") + path(c.name) + "'"), std::string::npos)
+            << r.err;
+        EXPECT_NE(r.err.find(c.problem), std::string::npos) << r.err;
+        EXPECT_FALSE(Filesystem::exists(path("out.exr")));
+    }
+    if (kPython.empty())
+        return;
+    RunResult r = python("buf = oiio.ImageBuf(" + quoted(path("missing_input.zdn")) + ")\n"
+                         "print(buf.read(), buf.geterror())\n");
+    EXPECT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("False"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("nope.exr': no such file"), std::string::npos) << r.out;
+}
+
+
+TEST_F(PluginTest, ValidFileDoesNotDenoise)
+{
+    if (kPython.empty())
+        GTEST_SKIP() << "/usr/bin/python3 not found";
+    // A recipe whose input is missing: valid_file() says "a recipe" without
+    // running it; only open() finds the problem.
+    write_text("missing_input.zdn", "{\"zdenoise-recipe\": 1, \"in\": \"nope.exr\"}");
+    write_text("plain.json", "{\"in\": \"nope.exr\"}");
+    RunResult r = python(
+        "reader = oiio.ImageInput.create(" + quoted(path("missing_input.zdn")) + ")\n"
+        "print(reader.format_name(), reader.valid_file(" + quoted(path("missing_input.zdn"))
+        + "),\n      reader.valid_file(" + quoted(path("plain.json")) + "),\n"
+        "      reader.valid_file(" + quoted(kSample) + "))\n");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.out, "zdn True False False\n");
+}
+
+
+TEST_F(PluginTest, WriteRecipeRoundTrip)
+{
+    Filesystem::create_directory(path("renders"));
+    Filesystem::create_directory(path("recipes"));
+    ASSERT_TRUE(Filesystem::copy(kSample, path("renders/shot.exr")));
+    const std::string flags = "--in " + quoted(path("renders/shot.exr"))
+                              + " --no-depth --eta 0.03 --rmax 12 --threads 1";
+    RunResult r = zdenoise(flags + " --write-recipe " + quoted(path("recipes/shot.zdn")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    std::vector<std::string> names;
+    Filesystem::get_directory_entries(path("recipes"), names);
+    EXPECT_EQ(names.size(), 1u) << "only the recipe: nothing denoised, no temporary left";
+    const std::string recipe = slurp(path("recipes/shot.zdn"));
+    EXPECT_NE(recipe.find("\"../renders/shot.exr\""), std::string::npos)
+        << "paths relative to the recipe's folder:\n" << recipe;
+    EXPECT_NE(recipe.find("\"eta\": 0.03"), std::string::npos) << recipe;
+
+    r = zdenoise(flags + " -o " + quoted(path("cli.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = oiiotool(quoted(path("recipes/shot.zdn")) + " -o " + quoted(path("plugin.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    expect_identical(path("cli.exr"), path("plugin.exr"));
+
+    // A recipe may not name a recipe.
+    r = zdenoise("--in " + quoted(path("recipes/shot.zdn")) + " --write-recipe "
+                 + quoted(path("again.zdn")));
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("itself a recipe"), std::string::npos) << r.err;
+    EXPECT_FALSE(Filesystem::exists(path("again.zdn")));
+}
