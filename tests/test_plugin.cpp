@@ -382,7 +382,7 @@ TEST_F(PluginTest, WriteRecipeRoundTrip)
     Filesystem::create_directory(path("recipes"));
     ASSERT_TRUE(Filesystem::copy(kSample, path("renders/shot.exr")));
     const std::string flags = "--in " + quoted(path("renders/shot.exr"))
-                              + " --no-depth --eta 0.03 --rmax 12 --threads 1";
+                              + " --no-depth --eta 0.03 --rmax 12 --stride 2 --threads 1";
     RunResult r = zdenoise(flags + " --write-recipe " + quoted(path("recipes/shot.zdn")));
     ASSERT_EQ(r.status, 0) << r.err;
     std::vector<std::string> names;
