@@ -8,10 +8,10 @@ command -v iinfo >/dev/null || { echo "iinfo not found (openimageio-tools)"; exi
 scratch=$(mktemp -d)
 trap 'rm -rf "$scratch"' EXIT
 cmake --install "$build_dir" --prefix "$scratch/prefix" >/dev/null
-plugin=$(find "$scratch/prefix" -name zdn.imageio.so)
-[ -n "$plugin" ] || { echo "zdn.imageio.so not installed"; exit 1; }
+plugin=$(find "$scratch/prefix" -name zdenoise.imageio.so)
+[ -n "$plugin" ] || { echo "zdenoise.imageio.so not installed"; exit 1; }
 "$scratch/prefix/bin/zdenoise" --in "$source_dir/share/samples/cornell_textured_spp16_crop.exr" \
     --write-recipe "$scratch/shot.zdn"
 info=$(env -u LD_LIBRARY_PATH OIIO_LIBRARY_PATH="$(dirname "$plugin")" iinfo "$scratch/shot.zdn")
 echo "$info"
-grep -q "96 x   96, 54 channel, float zdn" <<<"$info"
+grep -q "96 x   96, 54 channel, float zdenoise" <<<"$info"

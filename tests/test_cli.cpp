@@ -163,8 +163,8 @@ TEST_F(CliTest, DenoisesBundledSampleKeepingEverythingElse)
             ASSERT_EQ(out.getchannel(x, y, 0, diffcol),
                       noisy.getchannel(x, y, 0, diffcol));
     EXPECT_NE(out.spec().get_string_attribute("cryptomatte/542cafa/manifest"), "");
-    EXPECT_EQ(out.spec().get_string_attribute("zdenoise:version"), ZDENOISE_VERSION_STRING);
-    EXPECT_NE(out.spec().get_string_attribute("zdenoise:parameters").find("eta=0.02"),
+    EXPECT_EQ(out.spec().get_string_attribute("zdenoise.version"), ZDENOISE_VERSION_STRING);
+    EXPECT_NE(out.spec().get_string_attribute("zdenoise.parameters").find("eta=0.02"),
               std::string::npos);
 }
 

@@ -174,7 +174,7 @@ TEST_F(PluginTest, OiiotoolReadsRecipeAsTheImageZdenoiseWrites)
 
     // Same channels, pixel types and metadata (oiiotool stamps its own
     // Software and history), including zdenoise's own: the plugin on the
-    // search path must not make OIIO's writers drop "zdenoise:" metadata.
+    // search path must not make OIIO's writers drop "zdenoise." metadata.
     auto cli = ImageInput::open(path("cli.exr")), plugin = ImageInput::open(path("plugin.exr"));
     ASSERT_TRUE(cli && plugin);
     EXPECT_EQ(plugin->spec().channelnames, cli->spec().channelnames);
@@ -186,8 +186,8 @@ TEST_F(PluginTest, OiiotoolReadsRecipeAsTheImageZdenoiseWrites)
             EXPECT_EQ(from_plugin[name], value) << "metadata " << name;
         }
     }
-    EXPECT_EQ(from_cli["zdenoise:version"], ZDENOISE_VERSION_STRING);
-    EXPECT_NE(from_plugin["zdenoise:parameters"], "");
+    EXPECT_EQ(from_cli["zdenoise.version"], ZDENOISE_VERSION_STRING);
+    EXPECT_NE(from_plugin["zdenoise.parameters"], "");
 }
 
 
@@ -216,7 +216,7 @@ TEST_F(PluginTest, KeepsEachChannelsPixelType)
                                + quoted(path(name + "_cli.exr")));
         ASSERT_EQ(r.status, 0) << r.err;
         r = run(quoted(kIinfo) + " " + quoted(path(name + ".zdn")));
-        EXPECT_NE(r.out.find(name == "mixed" ? "half/half/half/half/float zdn" : "half zdn"),
+        EXPECT_NE(r.out.find(name == "mixed" ? "half/half/half/half/float zdenoise" : "half zdenoise"),
                   std::string::npos)
             << r.out << r.err;
         r = oiiotool(quoted(path(name + ".zdn")) + " -o " + quoted(path(name + "_oiiotool.exr")));
@@ -270,7 +270,7 @@ TEST_F(PluginTest, FileNameArgumentsOverrideTheRecipe)
                  + quoted(path("plugin.exr")));
     ASSERT_EQ(r.status, 0) << r.err;
     expect_identical(path("cli.exr"), path("plugin.exr"));
-    EXPECT_NE(metadata(path("plugin.exr"))["zdenoise:parameters"].find("eta=0.05"),
+    EXPECT_NE(metadata(path("plugin.exr"))["zdenoise.parameters"].find("eta=0.05"),
               std::string::npos);
 
     // ?preset=spec replaces the recipe's filter options by the preset's.
@@ -288,10 +288,10 @@ TEST_F(PluginTest, IinfoPrintsTheSpec)
     write_text("shot.zdn", sample_recipe());
     RunResult r = run(quoted(kIinfo) + " -v " + quoted(path("shot.zdn")));
     ASSERT_EQ(r.status, 0) << r.err;
-    for (const char* expected : { "96 x   96, 54 channel, float zdn",
+    for (const char* expected : { "96 x   96, 54 channel, float zdenoise",
                                   "ViewLayer.Combined.R", "ViewLayer.DiffCol.G",
-                                  "cryptomatte/542cafa/manifest", "zdenoise:version",
-                                  "zdenoise:parameters" })
+                                  "cryptomatte/542cafa/manifest", "zdenoise.version",
+                                  "zdenoise.parameters" })
         EXPECT_NE(r.out.find(expected), std::string::npos)
             << "iinfo -v lacks '" << expected << "':\n" << r.out;
 }
@@ -312,7 +312,7 @@ TEST_F(PluginTest, PythonImageBufOpensRecipe)
                "print(spec.width, spec.height, spec.nchannels, recipe.file_format_name,\n"
                "      cmp.nfail, cmp.maxerror)\n");
     ASSERT_EQ(r.status, 0) << r.err;
-    EXPECT_EQ(r.out, "96 96 54 zdn 0 0.0\n") << r.err;
+    EXPECT_EQ(r.out, "96 96 54 zdenoise 0 0.0\n") << r.err;
 }
 
 
@@ -372,7 +372,7 @@ TEST_F(PluginTest, ValidFileDoesNotDenoise)
         + "),\n      reader.valid_file(" + quoted(path("plain.json")) + "),\n"
         "      reader.valid_file(" + quoted(kSample) + "))\n");
     ASSERT_EQ(r.status, 0) << r.err;
-    EXPECT_EQ(r.out, "zdn True False False\n");
+    EXPECT_EQ(r.out, "zdenoise True False False\n");
 }
 
 

@@ -231,8 +231,8 @@ run(Job j, JobResult& result)
         out.set_write_format(native.channelformats);
     else
         out.set_write_format(native.format);
-    out.specmod().attribute("zdenoise:version", ZDENOISE_VERSION_STRING);
-    out.specmod().attribute("zdenoise:parameters", describe(j.filter));
+    out.specmod().attribute("zdenoise.version", ZDENOISE_VERSION_STRING);
+    out.specmod().attribute("zdenoise.parameters", describe(j.filter));
     result.image = std::move(out);
 }
 

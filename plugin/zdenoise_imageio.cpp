@@ -7,9 +7,9 @@
 // output's per-channel pixel types, so that a program writing what it
 // reads writes the same file `zdenoise` does.
 //
-// The format is named "zdn", not "zdenoise": OIIO's writers drop metadata
-// whose prefix before ':' is the name of another format, and zdenoise's
-// output carries "zdenoise:version" and "zdenoise:parameters".
+// The format is named "zdenoise". OIIO's writers drop metadata whose
+// prefix before ':' is the name of another format, which is why zdenoise's
+// own metadata is "zdenoise.version" and "zdenoise.parameters" (a dot).
 
 #include <cstring>
 #include <map>
@@ -48,7 +48,7 @@ public:
     ZdnInput() = default;
     ~ZdnInput() override { close(); }
 
-    const char* format_name() const override { return "zdn"; }
+    const char* format_name() const override { return "zdenoise"; }
 
     int supports(string_view feature) const override
     {
@@ -223,20 +223,20 @@ ZdnInput::read_native_scanlines(int subimage, int miplevel, int ybegin,
 
 OIIO_PLUGIN_EXPORTS_BEGIN
 
-OIIO_EXPORT int zdn_imageio_version = OIIO_PLUGIN_VERSION;
+OIIO_EXPORT int zdenoise_imageio_version = OIIO_PLUGIN_VERSION;
 
 OIIO_EXPORT const char*
-zdn_imageio_library_version()
+zdenoise_imageio_library_version()
 {
     return "zdenoise " ZDENOISE_VERSION_STRING;
 }
 
 OIIO_EXPORT ImageInput*
-zdn_input_imageio_create()
+zdenoise_input_imageio_create()
 {
     return new ZdnInput;
 }
 
-OIIO_EXPORT const char* zdn_input_extensions[] = { "zdn", nullptr };
+OIIO_EXPORT const char* zdenoise_input_extensions[] = { "zdn", nullptr };
 
 OIIO_PLUGIN_EXPORTS_END
