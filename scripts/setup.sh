@@ -3,7 +3,8 @@
 # Installs only what is missing; needs root (or sudo) when something is.
 set -euo pipefail
 packages=(g++ cmake make pkg-config libopenimageio-dev libopenexr-dev
-          openimageio-tools python3-openimageio nlohmann-json3-dev libgtest-dev)
+          openimageio-tools python3-openimageio nlohmann-json3-dev libgtest-dev
+          libopencolorio-dev opencolorio-tools)
 missing=()
 for p in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" \

@@ -70,6 +70,21 @@ Output:
                        plugin reads it as the denoised image
                        (share/zdn-format.md).
 
+Colour (OpenColorIO; docs/COLOUR.md):
+  --colorconfig FILE   OCIO config (default: $OCIO, else the bundled
+                       share/zdenoise/ocio/config.ocio).
+  --iscolorspace NAME  Colour space of the noisy input (default: an EXR's
+                       chromaticities, else the config's scene_linear; a
+                       PNG/JPEG's tag, sRGB). -v says what was assumed.
+  --albedo-colorspace NAME
+                       Colour space of the albedo (default: as --in when
+                       from the same file, else guessed the same way).
+  --ocolorspace NAME   Colour space of the output (default: the input's).
+  --working-colorspace NAME
+                       Space the filter works in (default: scene_linear).
+                       Demodulation is per channel: use the renderer's
+                       rendering space.
+
 Filter parameters (docs/FILTER.md):
   --preset NAME        Start from a parameter set: 'tuned' (default, tuned on
                        the public benchmark) or 'spec' (ALGORITHM.md section
@@ -165,6 +180,12 @@ parse_args(int argc, char* argv[])
         = { { "--in", &a.job.in },       { "--albedo", &a.job.albedo },
             { "--normal", &a.job.normal }, { "--depth", &a.job.depth },
             { "--id", &a.job.id },       { "--variance", &a.job.variance } };
+    std::map<std::string, std::string*> colour_options
+        = { { "--colorconfig", &a.job.colour.config },
+            { "--iscolorspace", &a.job.colour.input_space },
+            { "--albedo-colorspace", &a.job.colour.albedo_space },
+            { "--ocolorspace", &a.job.colour.output_space },
+            { "--working-colorspace", &a.job.colour.working_space } };
     std::map<std::string, float*> floats;
     std::map<std::string, int*> ints = { { "--threads", &a.job.threads } };
     for (const job::FilterOptionName& o : job::filter_option_names()) {
@@ -212,6 +233,8 @@ parse_args(int argc, char* argv[])
             a.recipe = value(opt);
         } else if (opt == "--preset") {
             value(opt);  // applied above
+        } else if (colour_options.count(opt)) {
+            *colour_options[opt] = value(opt);
         } else if (floats.count(opt)) {
             *floats[opt] = float(parse_number(opt, value(opt)));
         } else if (ints.count(opt)) {

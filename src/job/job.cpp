@@ -3,6 +3,7 @@
 
 #include "job.h"
 
+#include <cstdlib>
 #include <map>
 #include <memory>
 
@@ -130,6 +131,29 @@ apply_cycles_defaults(Job& j, const ImageSpec& spec,
 }
 
 
+/// The job's colour spaces, or none when no config is found and the user
+/// asked for nothing (the OIIO plugin outside an installation): then the
+/// pixels are filtered as they are.
+bool
+resolve_colour(const Job& j, InputFiles& files, colour::ColourConfig& config,
+               colour::JobSpaces& spaces, std::vector<std::string>& log)
+{
+    std::string err;
+    if (!j.colour.any_given() && !std::getenv("OCIO")
+        && colour::bundled_config_path().empty()) {
+        log.push_back("no colour config found: pixels filtered as they are");
+        return false;
+    }
+    if (!config.load(j.colour.config, err)
+        || !colour::resolve_job_spaces(config, j.colour, files.get(j.in.path),
+                                       files.get(j.albedo.path),
+                                       j.albedo.path == j.in.path, spaces,
+                                       log, err))
+        fail(err);
+    return true;
+}
+
+
 std::string
 channel_list(const ImageSpec& spec, const std::vector<int>& idx)
 {
@@ -173,6 +197,29 @@ run(Job j, JobResult& result)
     for (Optional& o : optional)
         if (o.arg->given && !o.disabled)
             o.image = load_role(files, *o.arg, o.role, &noisy, j.in.path);
+
+    // Radiance and albedo RGB into the working space (ocio/colour.h).
+    colour::ColourConfig config;
+    colour::JobSpaces spaces;
+    const bool managed = resolve_colour(j, files, config, spaces, result.log);
+    auto convert = [&](ImageBuf& image, const std::string& from,
+                       const std::string& to, const InputArg& arg) {
+        std::string err;
+        if (image.initialized() && !config.convert_rgb(image, from, to, err))
+            fail(format("'{}': {}", arg.path, one_line(err)));
+    };
+    if (managed) {
+        convert(radiance.image, spaces.input, spaces.working, j.in);
+        convert(albedo.image, spaces.albedo, spaces.working, j.albedo);
+        convert(optional[4].image.image, spaces.input, spaces.working,
+                j.half_a);
+        convert(optional[5].image.image, spaces.input, spaces.working,
+                j.half_b);
+        if (optional[3].image.image.initialized()
+            && spaces.input != spaces.working)
+            result.log.push_back("  variance  used as given (not converted "
+                                 "to the working space)");
+    }
     result.read_seconds = read_timer();
 
     Guides guides;
@@ -211,6 +258,8 @@ run(Job j, JobResult& result)
         fail(format("denoising '{}' failed: {}", j.in.path,
                     one_line(denoised.geterror())));
     result.denoise_seconds = denoise_timer();
+    if (managed)
+        convert(denoised, spaces.working, spaces.output, j.in);
 
     // The output: the input file with its radiance RGB replaced, each
     // channel written in its input pixel type.
@@ -231,6 +280,8 @@ run(Job j, JobResult& result)
         out.set_write_format(native.channelformats);
     else
         out.set_write_format(native.format);
+    if (managed)
+        colour::tag_colour_space(out.specmod(), spaces.output, spaces.input);
     out.specmod().attribute("zdenoise.version", ZDENOISE_VERSION_STRING);
     out.specmod().attribute("zdenoise.parameters", describe(j.filter));
     result.image = std::move(out);

@@ -16,6 +16,8 @@
 
 #include <zdenoise/zdenoise.h>
 
+#include "../../ocio/colour.h"
+
 namespace zdenoise {
 namespace job {
 
@@ -30,6 +32,7 @@ struct Job {
     InputArg in, albedo, normal, depth, id, variance, half_a, half_b;
     bool no_normal = false, no_depth = false, no_id = false;
     FilterOptions filter;
+    colour::ColourOptions colour;
     int threads = 0;  ///< 0: OIIO's "threads" attribute
 };
 

@@ -66,6 +66,29 @@ const FlagKey kFlags[] = { { "no-normal", &Job::no_normal },
                            { "no-depth", &Job::no_depth },
                            { "no-id", &Job::no_id } };
 
+/// The colour options (ocio/colour.h), by recipe key (the option names).
+struct ColourKey {
+    const char* key;
+    std::string colour::ColourOptions::*value;
+    bool is_path;  ///< a file, relative to the recipe's folder
+};
+const ColourKey kColourKeys[]
+    = { { "colorconfig", &colour::ColourOptions::config, true },
+        { "iscolorspace", &colour::ColourOptions::input_space, false },
+        { "albedo-colorspace", &colour::ColourOptions::albedo_space, false },
+        { "ocolorspace", &colour::ColourOptions::output_space, false },
+        { "working-colorspace", &colour::ColourOptions::working_space,
+          false } };
+
+const ColourKey*
+find_colour(const std::string& key)
+{
+    for (const ColourKey& k : kColourKeys)
+        if (key == k.key)
+            return &k;
+    return nullptr;
+}
+
 const InputKey*
 find_input(const std::string& key)
 {
@@ -104,6 +127,8 @@ known_keys(bool in_file_name)
     if (!in_file_name)
         s += ", halves";
     for (const FlagKey& k : kFlags)
+        s += std::string(", ") + k.key;
+    for (const ColourKey& k : kColourKeys)
         s += std::string(", ") + k.key;
     s += ", preset";
     for (const FilterOptionName& o : filter_option_names())
@@ -211,7 +236,7 @@ apply_overrides(json& recipe,
         int whole                      = 0;
         if (key == "preset") {
             continue;
-        } else if (find_input(key)) {
+        } else if (find_input(key) || find_colour(key)) {
             recipe[key] = text;
         } else if (find_flag(key)) {
             if (text == "1" || text == "true")
@@ -301,6 +326,15 @@ parse(const std::string& text, const std::string& folder,
                 fail(format("\"{}\" must be true or false, not {}", key,
                             shown(value)));
             job.*(flag->flag) = value.get<bool>();
+        } else if (const ColourKey* colour = find_colour(key)) {
+            if (!value.is_string() || value.get<std::string>().empty())
+                fail(format("\"{}\" must be a name in a string, not {}", key,
+                            shown(value)));
+            std::string text = value.get<std::string>();
+            if (colour->is_path && !folder.empty()
+                && !Filesystem::path_is_absolute(text))
+                text = folder + "/" + text;
+            job.colour.*(colour->value) = text;
         } else if (key == "threads") {
             job.threads = parse_whole_number(key, value);
             if (job.threads < 0)
@@ -449,6 +483,11 @@ recipe_text(const Job& job, const std::string& preset,
     for (const FlagKey& k : kFlags)
         if (job.*(k.flag))
             recipe[k.key] = true;
+    for (const ColourKey& k : kColourKeys) {
+        const std::string& text = job.colour.*(k.value);
+        if (!text.empty())
+            recipe[k.key] = k.is_path ? relative_path(text, folder) : text;
+    }
     recipe["preset"] = preset;
     for (const FilterOptionName& o : filter_option_names()) {
         if (o.whole) {
