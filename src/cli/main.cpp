@@ -28,6 +28,7 @@
 #include "../job/job.h"
 #include "../job/option_names.h"
 #include "../job/recipe.h"
+#include "sequence.h"
 
 using namespace OIIO;
 using OIIO::Strutil::fmt::format;
@@ -105,6 +106,19 @@ Filter parameters (docs/FILTER.md):
   --stride N           Speed option: fit windows at every N-th pixel only
                        (1 = the exact filter; see docs/PERFORMANCE.md)
 
+Frame sequences (oiiotool's conventions) and batches:
+  --frames LIST        Frames to denoise: 1001-1100, 1-99x2 (every 2nd),
+                       1,5,10-20; any FILE (and -o) may then name a frame
+                       pattern: shot.#.exr (4 digits), shot.@@@.exr (one
+                       digit per @), shot.%04d.exr.
+  --skip-existing      Leave frames whose output exists (re-runs).
+  --fail-fast          Stop at the first failed frame (default: report it,
+                       denoise the others, exit 1 at the end).
+  --report FILE.json   Per-frame wall time, parameters, filter statistics.
+  --print-chunks N     Print the frame list in chunks of N frames, one
+                       --frames list per line, and exit (farm dispatch:
+                       share/zdenoise/farm/zdenoise-sbatch).
+
 General:
   --threads N          Threads (default: all cores); results do not depend
                        on it.
@@ -134,6 +148,7 @@ struct Args {
     std::string recipe;  ///< --write-recipe
     bool force   = false;
     bool verbose = false;
+    cli::SequenceOptions batch;  ///< frame sequences, reports (sequence.h)
 };
 
 double
@@ -233,6 +248,18 @@ parse_args(int argc, char* argv[])
             a.recipe = value(opt);
         } else if (opt == "--preset") {
             value(opt);  // applied above
+        } else if (opt == "--frames") {
+            a.batch.frames = value(opt);
+        } else if (opt == "--report") {
+            a.batch.report = value(opt);
+        } else if (opt == "--fail-fast") {
+            a.batch.fail_fast = true;
+        } else if (opt == "--skip-existing") {
+            a.batch.skip_existing = true;
+        } else if (opt == "--print-chunks") {
+            a.batch.print_chunks = parse_int(opt, value(opt));
+            if (a.batch.print_chunks < 1)
+                fail("--print-chunks needs a chunk size >= 1", kExitUsage);
         } else if (colour_options.count(opt)) {
             *colour_options[opt] = value(opt);
         } else if (floats.count(opt)) {
@@ -256,7 +283,7 @@ parse_args(int argc, char* argv[])
     }
     if (!a.job.in.given)
         fail("no input: give --in FILE (see zdenoise --help)", kExitUsage);
-    if (a.output.empty() && a.recipe.empty())
+    if (a.output.empty() && a.recipe.empty() && !a.batch.print_chunks)
         fail("no output: give -o FILE (see zdenoise --help)", kExitUsage);
     if (!a.output.empty() && !a.recipe.empty())
         fail("give either -o FILE (denoise) or --write-recipe FILE (write a "
@@ -269,21 +296,15 @@ parse_args(int argc, char* argv[])
 }
 
 
-bool
-same_file(const std::string& a, const std::string& b)
-{
-    char ra[PATH_MAX], rb[PATH_MAX];
-    if (!realpath(a.c_str(), ra) || !realpath(b.c_str(), rb))
-        return false;
-    return std::strcmp(ra, rb) == 0;
-}
-
-
 int
 run(int argc, char* argv[])
 {
     Args a = parse_args(argc, argv);
     std::string err;
+    if (!a.recipe.empty() && cli::is_batch(a.job, a.recipe, a.batch))
+        fail("--write-recipe writes the recipe of one image: no frame "
+             "patterns, --frames or batch options",
+             kExitUsage);
     if (!a.recipe.empty()) {
         if (!job::write_recipe(a.job, a.preset, a.recipe, err))
             fail(err);
@@ -293,12 +314,20 @@ run(int argc, char* argv[])
     }
     if (a.job.threads > 0)
         OIIO::attribute("threads", a.job.threads);
+    a.batch.verbose = a.verbose;
+    a.batch.force   = a.force;
+    if (cli::is_batch(a.job, a.output, a.batch)) {
+        const int status = cli::run_batch(a.job, a.output, a.batch, err);
+        if (status != 0)
+            fail(err, status);
+        return 0;
+    }
     Timer total;
 
     // Never overwrite an input unless asked.
     if (!a.force)
         for (const std::string& in : job::input_paths(a.job))
-            if (same_file(in, a.output))
+            if (cli::same_file(in, a.output))
                 fail(format("the output '{}' is also an input; use --force "
                             "to replace it",
                             a.output));

@@ -1,0 +1,364 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+
+#include "sequence.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <climits>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/strutil.h>
+#include <OpenImageIO/timer.h>
+
+#include "../job/atomic_write.h"
+#include "../job/frames.h"
+
+namespace zdenoise {
+namespace cli {
+
+using namespace OIIO;
+using OIIO::Strutil::fmt::format;
+
+namespace {
+
+constexpr int kExitError = 1;
+constexpr int kExitUsage = 2;
+
+/// What became of one frame, for the summary and the report.
+struct FrameRecord {
+    int frame = 0;
+    bool has_number = true;
+    std::string output;
+    enum class Status { Done, Skipped, Failed } status = Status::Done;
+    std::string error;
+    double seconds = 0.0, read_seconds = 0.0, denoise_seconds = 0.0,
+           write_seconds = 0.0;
+    FilterStats stats;
+};
+
+const char*
+status_name(FrameRecord::Status s)
+{
+    switch (s) {
+    case FrameRecord::Status::Done: return "done";
+    case FrameRecord::Status::Skipped: return "skipped";
+    default: return "failed";
+    }
+}
+
+
+std::string
+seconds_text(double s)
+{
+    if (s < 60.0)
+        return format("{:.1f}s", s);
+    const int whole = int(s + 0.5);
+    return format("{}:{:02d}:{:02d}", whole / 3600, whole / 60 % 60,
+                  whole % 60);
+}
+
+
+/// The per-frame progress: on a terminal one line updated in place, else
+/// one line per frame (farm logs).
+class Progress {
+public:
+    explicit Progress(size_t total)
+        : m_total(total)
+        , m_tty(isatty(fileno(stderr)))
+    {
+    }
+
+    void starting(const FrameRecord& r, size_t done, double eta)
+    {
+        std::string line = format("zdenoise: [{}/{} done] {}", done, m_total,
+                                  r.has_number
+                                      ? format("frame {}", r.frame)
+                                      : std::string("the image"));
+        if (done > 0)
+            line += ", ETA " + seconds_text(eta);
+        if (m_tty) {
+            fprintf(stderr, "\r%-78s", line.c_str());
+            m_open = true;
+        } else {
+            fprintf(stderr, "%s\n", line.c_str());
+        }
+        fflush(stderr);
+    }
+
+    /// A line of its own (an error, the summary), after the updating line.
+    void line(const std::string& text)
+    {
+        if (m_open)
+            fputc('\n', stderr);
+        m_open = false;
+        fprintf(stderr, "%s\n", text.c_str());
+    }
+
+private:
+    size_t m_total;
+    bool m_tty;
+    bool m_open = false;
+};
+
+
+void
+run_frame(const job::Job& job, FrameRecord& r, const SequenceOptions& o)
+{
+    Timer wall;
+    auto failed = [&](const std::string& why) {
+        r.status  = FrameRecord::Status::Failed;
+        r.error   = why;
+        r.seconds = wall();
+    };
+    if (!o.force)
+        for (const std::string& in : job::input_paths(job))
+            if (same_file(in, r.output))
+                return failed(format("the output '{}' is also an input; use "
+                                     "--force to replace it",
+                                     r.output));
+    job::JobResult result;
+    std::string err;
+    const bool ok = job::run_job(job, result, err);
+    if (o.verbose)
+        for (const std::string& line : result.log)
+            printf("zdenoise: %s\n", line.c_str());
+    if (!ok)
+        return failed(err);
+    r.read_seconds    = result.read_seconds;
+    r.denoise_seconds = result.denoise_seconds;
+    r.stats           = result.stats;
+    Timer write_timer;
+    if (!job::write_atomically(result.image, r.output, err))
+        return failed(err);
+    r.write_seconds = write_timer();
+    r.seconds       = wall();
+}
+
+
+nlohmann::ordered_json
+stats_json(const FilterStats& s)
+{
+    const double w = double(std::max<int64_t>(s.windows, 1));
+    const double n = double(std::max<int64_t>(s.pixels, 1));
+    nlohmann::ordered_json j;
+    j["pixels"]             = s.pixels;
+    j["windows"]            = s.windows;
+    j["mean_radius"]        = s.mean_radius;
+    j["stop_quality_share"] = double(s.stop_quality) / w;
+    j["stop_size_share"]    = double(s.stop_size) / w;
+    j["stop_edge_share"]    = double(s.stop_edge) / w;
+    j["passthrough_pixels"] = s.passthrough_pixels;
+    j["passthrough_share"]  = double(s.passthrough_pixels) / n;
+    j["nonfinite_pixels"]   = s.nonfinite_pixels;
+    return j;
+}
+
+
+bool
+write_report(const std::string& path, const job::Job& job,
+             const std::vector<FrameRecord>& records, double seconds,
+             std::string& error)
+{
+    nlohmann::ordered_json report;
+    report["zdenoise"]   = ZDENOISE_VERSION_STRING;
+    report["parameters"] = describe(job.filter);
+    nlohmann::ordered_json colour;
+    colour["colorconfig"]        = job.colour.config;
+    colour["iscolorspace"]       = job.colour.input_space;
+    colour["albedo-colorspace"]  = job.colour.albedo_space;
+    colour["ocolorspace"]        = job.colour.output_space;
+    colour["working-colorspace"] = job.colour.working_space;
+    report["colour"]             = colour;
+    report["threads"]            = job.threads;
+    size_t done = 0, skipped = 0, failed = 0;
+    nlohmann::ordered_json frames = nlohmann::ordered_json::array();
+    for (const FrameRecord& r : records) {
+        nlohmann::ordered_json f;
+        if (r.has_number)
+            f["frame"] = r.frame;
+        f["output"] = r.output;
+        f["status"] = status_name(r.status);
+        if (r.status == FrameRecord::Status::Failed)
+            f["error"] = r.error;
+        f["seconds"] = r.seconds;
+        if (r.status == FrameRecord::Status::Done) {
+            f["read_seconds"]    = r.read_seconds;
+            f["denoise_seconds"] = r.denoise_seconds;
+            f["write_seconds"]   = r.write_seconds;
+            f["stats"]           = stats_json(r.stats);
+        }
+        frames.push_back(f);
+        done += r.status == FrameRecord::Status::Done;
+        skipped += r.status == FrameRecord::Status::Skipped;
+        failed += r.status == FrameRecord::Status::Failed;
+    }
+    report["frames"]  = frames;
+    report["summary"] = { { "frames", records.size() },
+                          { "done", done },
+                          { "skipped", skipped },
+                          { "failed", failed },
+                          { "seconds", seconds } };
+    const std::string text = report.dump(2) + "\n";
+    return job::write_atomically(
+        path,
+        [&](const std::string& tmp, std::string& why) {
+            std::ofstream file(tmp, std::ios::binary);
+            file << text;
+            file.close();
+            if (file)
+                return true;
+            why = std::strerror(errno);
+            return false;
+        },
+        error);
+}
+
+}  // namespace
+
+
+bool
+same_file(const std::string& a, const std::string& b)
+{
+    char ra[PATH_MAX], rb[PATH_MAX];
+    if (!realpath(a.c_str(), ra) || !realpath(b.c_str(), rb))
+        return false;
+    return std::strcmp(ra, rb) == 0;
+}
+
+
+bool
+is_batch(const job::Job& job, const std::string& output,
+         const SequenceOptions& o)
+{
+    return job::job_has_frame_pattern(job) || job::has_frame_pattern(output)
+           || !o.frames.empty() || !o.report.empty() || o.skip_existing
+           || o.fail_fast || o.print_chunks > 0;
+}
+
+
+int
+run_batch(const job::Job& job, const std::string& output,
+          const SequenceOptions& o, std::string& error)
+{
+    // The frames: --frames, else a list in a file name ("s.1-10#.exr").
+    std::string frames_in_name;
+    const bool patterned_in  = job::job_has_frame_pattern(job, &frames_in_name);
+    const bool patterned_out = job::has_frame_pattern(output, &frames_in_name);
+    const std::string list   = o.frames.empty() ? frames_in_name : o.frames;
+    std::vector<int> frames;
+    const bool sequence = patterned_in || patterned_out;
+    if (sequence) {
+        if (list.empty()) {
+            error = "a frame pattern (#, @ or %0Nd) needs --frames, e.g. "
+                    "--frames 1001-1100";
+            return kExitUsage;
+        }
+        if (!job::parse_frame_list(list, frames)) {
+            error = format("--frames: '{}' is not a frame list (e.g. "
+                           "1001-1100, 1-99x2, 1,5,9)",
+                           list);
+            return kExitUsage;
+        }
+        if (patterned_in && !patterned_out && !output.empty()) {
+            error = format("-o '{}' has no frame pattern: every frame would "
+                           "write it; use e.g. clean.#.exr",
+                           output);
+            return kExitUsage;
+        }
+    } else if (!o.frames.empty() || o.print_chunks > 0) {
+        error = "--frames needs a frame pattern (#, @ or %0Nd) in the input "
+                "and output names, e.g. --in shot.#.exr -o clean.#.exr";
+        return kExitUsage;
+    }
+    if (o.print_chunks > 0) {
+        for (const std::string& chunk : job::frame_chunks(frames,
+                                                          o.print_chunks))
+            printf("%s\n", chunk.c_str());
+        return 0;
+    }
+
+    std::vector<FrameRecord> records;
+    if (sequence) {
+        for (int f : frames) {
+            FrameRecord r;
+            r.frame  = f;
+            r.output = job::frame_path(output, f);
+            records.push_back(r);
+        }
+    } else {
+        FrameRecord r;
+        r.has_number = false;
+        r.output     = output;
+        records.push_back(r);
+    }
+
+    Timer total;
+    Progress progress(records.size());
+    size_t done = 0, skipped = 0, failed = 0;
+    double work_seconds = 0.0;  // of frames denoised, for the ETA
+    std::string failed_frames;
+    for (FrameRecord& r : records) {
+        const size_t finished = done + failed;
+        const size_t left     = records.size() - done - failed - skipped;
+        if (o.skip_existing && Filesystem::exists(r.output)) {
+            r.status = FrameRecord::Status::Skipped;
+            ++skipped;
+            if (o.verbose)
+                progress.line(format("zdenoise: frame {}: '{}' exists, "
+                                     "skipped",
+                                     r.frame, r.output));
+            continue;
+        }
+        progress.starting(r, done + failed + skipped,
+                          finished ? work_seconds / double(finished)
+                                         * double(left)
+                                   : 0.0);
+        run_frame(sequence ? job::job_for_frame(job, r.frame) : job, r, o);
+        work_seconds += r.seconds;
+        if (r.status == FrameRecord::Status::Failed) {
+            ++failed;
+            failed_frames += (failed_frames.empty() ? "" : ",")
+                             + (r.has_number ? std::to_string(r.frame)
+                                             : r.output);
+            progress.line(format("zdenoise: error: {}{}",
+                                 r.has_number ? format("frame {}: ", r.frame)
+                                              : std::string(),
+                                 r.error));
+            if (o.fail_fast)
+                break;
+        } else {
+            ++done;
+        }
+    }
+    const double seconds = total();
+    progress.line(format("zdenoise: {} frame{}: {} denoised, {} skipped, {} "
+                         "failed{} in {}",
+                         records.size(), records.size() == 1 ? "" : "s", done,
+                         skipped, failed,
+                         (o.fail_fast && failed)
+                             ? format(", {} not started",
+                                      records.size() - done - skipped - failed)
+                             : std::string(),
+                         seconds_text(seconds)));
+    if (!o.report.empty() && !write_report(o.report, job, records, seconds,
+                                           error))
+        return kExitError;
+    if (failed) {
+        error = format("{} of {} frames failed: {}", failed, records.size(),
+                       failed_frames);
+        return kExitError;
+    }
+    return 0;
+}
+
+}  // namespace cli
+}  // namespace zdenoise

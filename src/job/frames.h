@@ -1,0 +1,52 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Frame sequences with oiiotool's conventions (OIIO's Filesystem pattern
+// functions, so that both programs read a name the same way): in a file
+// name `#` is a frame number of 4 digits (`##` of 8), `@` one digit per `@`,
+// `%04d` printf style; frame lists are "1001-1100", "1-10x2" (every 2nd),
+// "1-10y2" (the others), and comma lists of those.
+
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "job.h"
+
+namespace zdenoise {
+namespace job {
+
+/// Whether `path` has a frame wildcard. An oiiotool-style frame list
+/// inside the name ("shot.1001-1010#.exr") goes to `frames_in_name`.
+bool
+has_frame_pattern(const std::string& path, std::string* frames_in_name = nullptr);
+
+/// `path` with its frame wildcard replaced by `frame`; `path` itself when it
+/// has none.
+std::string
+frame_path(const std::string& path, int frame);
+
+/// The frames of a frame list; false when it is malformed or empty.
+bool
+parse_frame_list(const std::string& list, std::vector<int>& frames);
+
+/// Frames as a frame list, runs written as ranges: "1001-1003,1007".
+std::string
+frame_list_text(const std::vector<int>& frames);
+
+/// `frames` in consecutive chunks of `chunk_size` (the last may be shorter),
+/// each as a frame list: what one farm task denoises.
+std::vector<std::string>
+frame_chunks(const std::vector<int>& frames, int chunk_size);
+
+/// Whether any input of `job` names a frame pattern.
+bool
+job_has_frame_pattern(const Job& job, std::string* frames_in_name = nullptr);
+
+/// `job` for one frame: the frame wildcard of every input path replaced.
+Job
+job_for_frame(const Job& job, int frame);
+
+}  // namespace job
+}  // namespace zdenoise

@@ -1,0 +1,205 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Frame sequences as a production user runs them: oiiotool's frame
+// patterns, a missing or corrupt frame reported while the others are
+// denoised, --fail-fast, --skip-existing, progress lines, the JSON report,
+// and the chunks a farm dispatches.
+
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+
+#include "cli_harness.h"
+#include "synthetic_scenes.h"
+
+using namespace OIIO;
+using namespace cli_harness;
+
+namespace {
+
+class Sequence : public FolderTest {
+protected:
+    /// Tiny frames: noisy.<frame>.exr and albedo.<frame>.exr, each frame
+    /// its own noise.
+    void write_frames(const std::vector<int>& frames, const std::string& digits = "%04d")
+    {
+        for (int f : frames) {
+            synth::Scene s = synth::fine_texture(20, 14, { 8, uint32_t(f) });
+            char number[32];
+            std::snprintf(number, sizeof number, digits.c_str(), f);
+            ASSERT_TRUE(s.noisy.write(path(std::string("noisy.") + number + ".exr")));
+            ASSERT_TRUE(s.albedo.write(path(std::string("albedo.") + number + ".exr")));
+        }
+    }
+    std::string sequence_args() const
+    {
+        return "--in " + path("noisy.#.exr") + " --albedo " + path("albedo.#.exr") + " -o "
+               + path("out.#.exr");
+    }
+};
+
+/// The progress line when frame `frame` starts, `done` frames before it.
+std::string
+format_progress(int done, int frame)
+{
+    return "zdenoise: [" + std::to_string(done) + "/6 done] frame " + std::to_string(frame);
+}
+
+bool
+same_pixels(const std::string& a, const std::string& b)
+{
+    ImageBuf x(a), y(b);
+    auto d = ImageBufAlgo::compare(x, y, 0.0f, 0.0f);
+    return !x.has_error() && !y.has_error() && d.nfail == 0 && d.maxerror == 0.0;
+}
+
+}  // namespace
+
+
+TEST_F(Sequence, MissingAndCorruptFramesAreReportedAndTheOthersDenoised)
+{
+    write_frames({ 1001, 1002, 1004, 1006 });
+    write_frames({ 1005 });
+    std::ofstream(path("noisy.1005.exr"), std::ios::trunc) << "not an image";
+    RunResult r = zdenoise(sequence_args() + " --frames 1001-1006 --report "
+                           + path("report.json"));
+    EXPECT_EQ(r.status, 1) << r.err;
+    for (int f : { 1001, 1002, 1004, 1006 })
+        EXPECT_TRUE(Filesystem::exists(path("out." + std::to_string(f) + ".exr"))) << f;
+    EXPECT_FALSE(Filesystem::exists(path("out.1003.exr")));
+    EXPECT_FALSE(Filesystem::exists(path("out.1005.exr")));
+    EXPECT_NE(r.err.find("zdenoise: error: frame 1003: cannot read '" + path("noisy.1003.exr")),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("zdenoise: error: frame 1005: "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("6 frames: 4 denoised, 0 skipped, 2 failed"), std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("2 of 6 frames failed: 1003,1005"), std::string::npos) << r.err;
+    // Not on a terminal: one progress line per frame started.
+    for (int k = 0; k < 6; ++k)
+        EXPECT_NE(r.err.find(format_progress(k, 1001 + k)), std::string::npos) << r.err;
+
+    // A frame of the sequence is the image a single run writes.
+    r = zdenoise("--in " + path("noisy.1004.exr") + " --albedo " + path("albedo.1004.exr")
+                 + " -o " + path("single.exr"));
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_TRUE(same_pixels(path("single.exr"), path("out.1004.exr")));
+
+    // The report: one entry per frame, timings, parameters, statistics.
+    nlohmann::json report = nlohmann::json::parse(slurp(path("report.json")));
+    ASSERT_EQ(report["frames"].size(), 6u);
+    EXPECT_NE(report["parameters"].get<std::string>().find("eta=0.02"), std::string::npos);
+    EXPECT_EQ(report["summary"]["failed"], 2);
+    for (const auto& f : report["frames"]) {
+        const int frame = f["frame"];
+        if (frame == 1003 || frame == 1005) {
+            EXPECT_EQ(f["status"], "failed");
+            EXPECT_FALSE(f["error"].get<std::string>().empty());
+            continue;
+        }
+        EXPECT_EQ(f["status"], "done") << frame;
+        EXPECT_GT(f["seconds"].get<double>(), 0.0);
+        const auto& s = f["stats"];
+        EXPECT_GT(s["mean_radius"].get<double>(), 1.0);
+        EXPECT_NEAR(s["stop_quality_share"].get<double>() + s["stop_size_share"].get<double>()
+                        + s["stop_edge_share"].get<double>(),
+                    1.0, 1e-9);
+        EXPECT_EQ(s["passthrough_pixels"], 0);
+    }
+}
+
+
+TEST_F(Sequence, FailFastStopsAtTheFirstFailedFrame)
+{
+    write_frames({ 1001, 1002, 1004 });
+    RunResult r = zdenoise(sequence_args() + " --frames 1001-1004 --fail-fast");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_TRUE(Filesystem::exists(path("out.1002.exr")));
+    EXPECT_FALSE(Filesystem::exists(path("out.1004.exr"))) << "nothing after the failure";
+    EXPECT_NE(r.err.find("1 not started"), std::string::npos) << r.err;
+}
+
+
+TEST_F(Sequence, SkipExistingLeavesFinishedFramesAlone)
+{
+    write_frames({ 1, 2, 3 });
+    RunResult r = zdenoise(sequence_args() + " --frames 1-3");
+    ASSERT_EQ(r.status, 0) << r.err;
+    // Mark frame 2's output: a re-run must not touch it.
+    ImageBuf marker(ImageSpec(4, 4, 3, TypeFloat));
+    ASSERT_TRUE(marker.write(path("out.0002.exr")));
+    Filesystem::remove(path("out.0003.exr"));
+    r = zdenoise(sequence_args() + " --frames 1-3 --skip-existing --report "
+                 + path("r.json"));
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.err.find("3 frames: 1 denoised, 2 skipped, 0 failed"), std::string::npos)
+        << r.err;
+    EXPECT_EQ(ImageBuf(path("out.0002.exr")).spec().width, 4);
+    EXPECT_TRUE(Filesystem::exists(path("out.0003.exr")));
+    nlohmann::json report = nlohmann::json::parse(slurp(path("r.json")));
+    EXPECT_EQ(report["frames"][1]["status"], "skipped");
+}
+
+
+TEST_F(Sequence, OiiotoolFramePatternsAndFrameLists)
+{
+    write_frames({ 1, 3, 5, 7 });
+    // %04d in, @@@@ out, a stepped range.
+    RunResult r = zdenoise("--in " + path("noisy.%04d.exr") + " --albedo "
+                           + path("albedo.%04d.exr") + " -o " + path("a.@@@@.exr")
+                           + " --frames 1-7x2");
+    ASSERT_EQ(r.status, 0) << r.err;
+    for (const char* f : { "a.0001.exr", "a.0003.exr", "a.0005.exr", "a.0007.exr" })
+        EXPECT_TRUE(Filesystem::exists(path(f))) << f;
+    // A comma list, and # (4 digits); @ is one digit.
+    r = zdenoise(sequence_args() + " --frames 3,7");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_TRUE(Filesystem::exists(path("out.0003.exr")));
+    EXPECT_TRUE(Filesystem::exists(path("out.0007.exr")));
+    EXPECT_FALSE(Filesystem::exists(path("out.0005.exr")));
+    r = zdenoise(sequence_args() + " -o " + path("b.@.exr") + " --frames 5");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_TRUE(Filesystem::exists(path("b.5.exr")));
+    // The frame list may be in the name, as oiiotool allows.
+    r = zdenoise("--in " + path("noisy.1-3x2#.exr") + " --albedo " + path("albedo.#.exr")
+                 + " -o " + path("c.#.exr"));
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_TRUE(Filesystem::exists(path("c.0003.exr")));
+}
+
+
+TEST_F(Sequence, UsageErrorsAreOneLine)
+{
+    write_frames({ 1 });
+    RunResult r = zdenoise(sequence_args());
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("needs --frames"), std::string::npos) << r.err;
+    r = zdenoise(sequence_args() + " --frames banana");
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("--frames: 'banana'"), std::string::npos) << r.err;
+    r = zdenoise("--in " + path("noisy.#.exr") + " --albedo " + path("albedo.#.exr") + " -o "
+                 + path("out.exr") + " --frames 1");
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("no frame pattern"), std::string::npos) << r.err;
+    EXPECT_FALSE(Filesystem::exists(path("out.exr")));
+    for (const RunResult& e : { r })
+        EXPECT_EQ(std::count(e.err.begin(), e.err.end(), '\n'), 1) << e.err;
+}
+
+
+TEST_F(Sequence, PrintChunksSplitsTheFrameListForAFarm)
+{
+    RunResult r = zdenoise(sequence_args() + " --frames 1001-1006 --print-chunks 2");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.out, "1001-1002\n1003-1004\n1005-1006\n");
+    r = zdenoise(sequence_args() + " --frames 1-9x2 --print-chunks 4");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.out, "1,3,5,7\n9\n");
+}
