@@ -7,6 +7,7 @@
 // linearised before filtering.
 
 #include <cmath>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -365,4 +366,43 @@ TEST_F(Colour, RecipeCarriesTheColourOptionsToOiiotool)
     EXPECT_EQ(max_rgb_difference(read_float(path("via_recipe.exr")),
                                  read_float(path("direct.exr"))),
               0.0);
+}
+
+
+TEST_F(Colour, FilteringInTheRenderingSpaceBeatsOtherPrimaries)
+{
+    // Demodulation is per channel: with coloured light on a texture of
+    // saturated colours, the quotient radiance / albedo is the smooth light
+    // only in the space the image was rendered in (here linear Rec.709).
+    const int w = 48, h = 32;
+    std::vector<float> clean, noisy, albedo;
+    std::mt19937 rng(1234);
+    std::gamma_distribution<float> noise(16.0f, 1.0f / 16.0f);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const bool red  = ((x >> 1) + (y >> 1)) & 1;
+            const float a[3] = { red ? 0.8f : 0.08f, 0.12f, red ? 0.08f : 0.8f };
+            const float s    = 0.6f + 0.3f * std::sin(6.2832f * x / w);
+            const float l[3] = { 1.0f * s, 0.7f * s, 0.35f * s };
+            const float m    = noise(rng);
+            for (int c = 0; c < 3; ++c) {
+                albedo.push_back(a[c]);
+                clean.push_back(a[c] * l[c]);
+                noisy.push_back(a[c] * l[c] * m);
+            }
+        }
+    write_exr("noisy.exr", synth::make_image(w, h, 3, noisy));
+    write_exr("albedo.exr", synth::make_image(w, h, 3, albedo));
+    const ImageBuf truth = synth::make_image(w, h, 3, clean);
+    RunResult r = zdenoise("--in " + path("noisy.exr") + " --albedo " + path("albedo.exr")
+                           + " -o " + path("rendering.exr"));
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = zdenoise("--in " + path("noisy.exr") + " --albedo " + path("albedo.exr")
+                 + " --working-colorspace ACES2065-1 -o " + path("ap0.exr"));
+    ASSERT_EQ(r.status, 0) << r.err;
+    const double right = synth::rel_mse(read_float(path("rendering.exr")), truth);
+    const double wrong = synth::rel_mse(read_float(path("ap0.exr")), truth);
+    std::printf("  relMSE: working in the rendering space %.5f, in ACES2065-1 %.5f\n", right,
+                wrong);
+    EXPECT_LT(right * 1.2, wrong);
 }
