@@ -203,3 +203,48 @@ TEST_F(Sequence, PrintChunksSplitsTheFrameListForAFarm)
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_EQ(r.out, "1,3,5,7\n9\n");
 }
+
+
+TEST_F(Sequence, ReportForASingleImage)
+{
+    write_frames({ 7 });
+    RunResult r = zdenoise("--in " + path("noisy.0007.exr") + " --albedo "
+                           + path("albedo.0007.exr") + " -o " + path("out.exr") + " --report "
+                           + path("r.json"));
+    ASSERT_EQ(r.status, 0) << r.err;
+    nlohmann::json report = nlohmann::json::parse(slurp(path("r.json")));
+    ASSERT_EQ(report["frames"].size(), 1u);
+    EXPECT_EQ(report["frames"][0]["status"], "done");
+    EXPECT_FALSE(report["frames"][0].contains("frame")) << "no frame number to report";
+    // A failure is one error line, the last.
+    r = zdenoise("--in " + path("nope.exr") + " --albedo " + path("albedo.0007.exr") + " -o "
+                 + path("out2.exr") + " --report " + path("r2.json"));
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n') > 0, true);
+    const std::string last = r.err.substr(r.err.rfind("zdenoise: error:"));
+    EXPECT_NE(last.find("nope.exr"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("zdenoise: error:"), r.err.rfind("zdenoise: error:")) << r.err;
+}
+
+
+TEST_F(Sequence, OnATerminalProgressIsOneUpdatingLine)
+{
+    if (std::system("command -v script >/dev/null 2>&1") != 0)
+        GTEST_SKIP() << "script (util-linux) not found to provide a terminal";
+    write_frames({ 1, 2, 3 });
+    // script(1) runs the command on a pseudo-terminal.
+    RunResult r = run_command("script -qec " + quoted(quoted(ZDENOISE_CLI) + " " + sequence_args()
+                                                      + " --frames 1-3")
+                                  + " /dev/null",
+                              path(".run"));
+    ASSERT_EQ(r.status, 0) << r.out << r.err;
+    const size_t first = r.out.find("zdenoise: [0/3 done] frame 1");
+    const size_t last  = r.out.find("\rzdenoise: [2/3 done] frame 3");
+    const size_t sum   = r.out.find("3 frames: 3 denoised");
+    ASSERT_NE(first, std::string::npos) << r.out;
+    ASSERT_NE(last, std::string::npos) << "frames overwrite one line with \\r:\n" << r.out;
+    ASSERT_NE(sum, std::string::npos) << r.out;
+    const std::string between = r.out.substr(first, sum - first);
+    EXPECT_EQ(std::count(between.begin(), between.end(), '\n'), 1)
+        << "one line break, before the summary:\n" << between;
+}

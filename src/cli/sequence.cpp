@@ -329,10 +329,9 @@ run_batch(const job::Job& job, const std::string& output,
             failed_frames += (failed_frames.empty() ? "" : ",")
                              + (r.has_number ? std::to_string(r.frame)
                                              : r.output);
-            progress.line(format("zdenoise: error: {}{}",
-                                 r.has_number ? format("frame {}: ", r.frame)
-                                              : std::string(),
-                                 r.error));
+            if (r.has_number)  // a single image's error is the last line
+                progress.line(format("zdenoise: error: frame {}: {}", r.frame,
+                                     r.error));
             if (o.fail_fast)
                 break;
         } else {
@@ -353,8 +352,9 @@ run_batch(const job::Job& job, const std::string& output,
                                            error))
         return kExitError;
     if (failed) {
-        error = format("{} of {} frames failed: {}", failed, records.size(),
-                       failed_frames);
+        error = sequence ? format("{} of {} frames failed: {}", failed,
+                                  records.size(), failed_frames)
+                         : records.front().error;
         return kExitError;
     }
     return 0;
