@@ -30,6 +30,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <OpenImageIO/imagebuf.h>
 
@@ -204,6 +205,71 @@ ZDENOISE_API ImageBuf denoise(const ImageBuf& radiance, const ImageBuf& albedo,
                               const FilterOptions& options = {},
                               FilterStats* stats = nullptr, ROI roi = {},
                               int nthreads = 0);
+
+/// One layer of a layered render (ALGORITHM.md section 7): the radiance of
+/// one specular history or BSDF lobe with its own albedo (colour) pass.
+struct Layer {
+    /// What the layer is called (in messages, and for the caller's output).
+    std::string name;
+    /// The layer's radiance L, channels 0-2 RGB. When `divided`, the
+    /// quotient z = L / colour as Blender Cycles writes its Direct/Indirect
+    /// lighting passes (DiffDir + DiffInd etc.).
+    const ImageBuf* radiance = nullptr;
+    /// The layer's albedo (colour pass), channels 0-2, same data window.
+    const ImageBuf* albedo = nullptr;
+    /// `radiance` is already divided by `albedo`: it is filtered as the
+    /// quotient as it is, and the result is multiplied by the albedo itself
+    /// (not albedo + albedo_eps), as the renderer composes it. Channels whose
+    /// albedo is below albedo_eps are not filtered (as in demodulate()).
+    bool divided = false;
+    /// false: the layer is not filtered, only composed (radiance, or
+    /// albedo * quotient when `divided`).
+    bool filter = true;
+    /// Guides of this layer (e.g. the normals seen through a mirror); each
+    /// member given here replaces the shared guide of the same kind.
+    Guides guides;
+    /// If not null, receives the layer's denoised radiance (RGB float, the
+    /// layer's contribution to the sum), computed in roi.
+    ImageBuf* denoised = nullptr;
+    /// If not null, receives what the filter did on this layer.
+    FilterStats* stats = nullptr;
+};
+
+/// Layered denoising (ALGORITHM.md section 7): every layer is denoised on
+/// its own (demodulate, regression_filter, remodulate; or, for a divided
+/// layer, regression_filter and a product with its albedo), and the result
+/// is the sum of the denoised layers plus the residual, unfiltered. A
+/// filtered layer's radiance is clamped at 0 (a layer's light is never
+/// negative, but the filter's planes can extrapolate below 0 on a steep
+/// convex ramp such as a ceiling next to a light). With
+/// `filter` false on every layer the result is the plain sum of the layers
+/// and the residual: when the residual is the beauty minus the layers, that
+/// is the beauty (to float rounding).
+///
+/// @param dst       The sum, RGB (3 channels, float when allocated here).
+/// @param layers    The layers, at least one; every image must cover the
+///                  data window of the first layer's radiance, which the
+///                  filter sees as the image (its windows clip there).
+/// @param residual  What has no albedo counterpart (emission, environment,
+///                  paths beyond the layers), channels 0-2, added as it is;
+///                  null for none.
+/// @param guides    Guides shared by the layers (Layer::guides overrides).
+/// @param options   Filter parameters, the same for every layer.
+/// @param stats     If not null, the statistics summed over the filtered
+///                  layers (pixels too; mean_radius weighted by windows).
+ZDENOISE_API bool layered_denoise(ImageBuf& dst,
+                                  const std::vector<Layer>& layers,
+                                  const ImageBuf* residual = nullptr,
+                                  const Guides& guides = {},
+                                  const FilterOptions& options = {},
+                                  FilterStats* stats = nullptr, ROI roi = {},
+                                  int nthreads = 0);
+ZDENOISE_API ImageBuf layered_denoise(const std::vector<Layer>& layers,
+                                      const ImageBuf* residual = nullptr,
+                                      const Guides& guides = {},
+                                      const FilterOptions& options = {},
+                                      FilterStats* stats = nullptr,
+                                      ROI roi = {}, int nthreads = 0);
 
 /// "name=value ..." of every filter parameter, as recorded in output
 /// metadata and printed by `zdenoise -v`.
