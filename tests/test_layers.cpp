@@ -2,20 +2,24 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
 // Layered denoising: the library op loses nothing of the beauty when it
-// filters nothing, and removes each layer's noise when it does.
+// filters nothing, and removes each layer's noise when it does; the
+// command recognises the conventions of docs/LAYERS.md (Blender Cycles,
+// Arnold-style AOVs, specular depth layers, multipart EXR), decodes
+// Cryptomatte into the id guide, and writes the output types asked for.
 
 #include <cmath>
 #include <string>
 #include <vector>
 
+#include <OpenImageIO/imageio.h>
+
 #include <zdenoise/zdenoise.h>
 
-#include <gtest/gtest.h>
-
-#include <OpenImageIO/imagebufalgo.h>
+#include "cli_test.h"
 #include "synthetic_scenes.h"
 
 using namespace OIIO;
+using namespace cli_test;
 
 namespace {
 
@@ -127,6 +131,43 @@ struct LobeRender {
 };
 
 
+/// One named channel of an image, for writing files.
+struct Channel {
+    std::string name;
+    const ImageBuf* image;
+    int channel;
+};
+
+/// A float image of the channels (all W x H).
+ImageBuf
+assemble(const std::vector<Channel>& channels)
+{
+    ImageSpec spec(W, H, int(channels.size()), TypeFloat);
+    spec.channelnames.clear();
+    for (const Channel& c : channels)
+        spec.channelnames.push_back(c.name);
+    spec.alpha_channel = -1;
+    ImageBuf out(spec);
+    std::vector<float> plane(size_t(W) * H);
+    for (size_t i = 0; i < channels.size(); ++i) {
+        const Channel& c = channels[i];
+        c.image->get_pixels(ROI(0, W, 0, H, 0, 1, c.channel, c.channel + 1), TypeFloat,
+                            plane.data());
+        out.set_pixels(ROI(0, W, 0, H, 0, 1, int(i), int(i) + 1), TypeFloat, plane.data());
+    }
+    return out;
+}
+
+/// Channels LAYER.R,G,B (or the given component names) of `img`.
+void
+add_rgb(std::vector<Channel>& chans, const std::string& layer, const ImageBuf& img,
+        const char* comps = "RGB")
+{
+    for (int c = 0; comps[c]; ++c)
+        chans.push_back({ (layer.empty() ? "" : layer + ".") + std::string(1, comps[c]),
+                          &img, c });
+}
+
 }  // namespace
 
 
@@ -201,3 +242,286 @@ TEST(LayeredDenoise, ErrorsNameTheLayer)
 }
 
 
+// ---- conventions, through the command ----
+
+class LayersCli : public CliTest {
+protected:
+    /// The LobeRender as a Blender Cycles multilayer EXR.
+    std::string write_cycles(const LobeRender& r, const std::string& name)
+    {
+        const std::string P = "ViewLayer.";
+        ImageBuf alpha = constant(1.0f, 1), zero = constant(0.0f);
+        ImageBuf dir = product(r.diff_z, constant(0.7f)), ind = product(r.diff_z, constant(0.3f));
+        std::vector<Channel> ch;
+        add_rgb(ch, P + "Combined", r.beauty);
+        ch.push_back({ P + "Combined.A", &alpha, 0 });
+        add_rgb(ch, P + "Denoising Albedo", r.denoising_albedo);
+        add_rgb(ch, P + "DiffCol", r.diff_col);
+        add_rgb(ch, P + "DiffDir", dir);
+        add_rgb(ch, P + "DiffInd", ind);
+        add_rgb(ch, P + "GlossCol", r.gloss_col);
+        add_rgb(ch, P + "GlossDir", r.gloss_z);
+        add_rgb(ch, P + "GlossInd", zero);
+        add_rgb(ch, P + "Emit", r.emit);
+        add_rgb(ch, P + "Env", zero);
+        ImageBuf img = assemble(ch);
+        EXPECT_TRUE(img.write(path(name))) << img.geterror();
+        return path(name);
+    }
+
+    /// Arnold-style AOVs of the LobeRender (diffuse, specular with their
+    /// albedos; N, Z; emission only in the beauty).
+    std::vector<Channel> arnold_channels(const LobeRender& r, std::vector<ImageBuf>& keep)
+    {
+        keep.clear();
+        keep.reserve(8);
+        keep.push_back(product(r.diff_col, r.diff_z));    // 0 diffuse
+        keep.push_back(product(r.gloss_col, r.gloss_z));  // 1 specular
+        keep.push_back(constant(1.0f, 1));                // 2 alpha
+        keep.push_back(r.glossy.normal);                  // 3 N
+        keep.push_back(r.glossy.depth);                   // 4 Z
+        std::vector<Channel> ch;
+        add_rgb(ch, "", r.beauty);
+        ch.push_back({ "A", &keep[2], 0 });
+        add_rgb(ch, "diffuse", keep[0]);
+        add_rgb(ch, "diffuse_albedo", r.diff_col);
+        add_rgb(ch, "specular", keep[1]);
+        add_rgb(ch, "specular_albedo", r.gloss_col);
+        add_rgb(ch, "N", keep[3], "XYZ");
+        ch.push_back({ "Z", &keep[4], 0 });
+        return ch;
+    }
+};
+
+
+TEST_F(LayersCli, CyclesLobesAreFoundAndTheirAovsAddUpToTheBeauty)
+{
+    LobeRender r;
+    const std::string in = write_cycles(r, "cycles.exr");
+    RunResult res = run("--in " + in + " -o " + path("out.exr") + " --mode layers --aovs -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    for (const char* needle : { "Blender Cycles", "layer     ViewLayer.Diff: ViewLayer.DiffDir",
+                                "ViewLayer.DiffInd", "albedo ViewLayer.DiffCol", "(divided by it)",
+                                "layer     ViewLayer.Gloss", "ViewLayer.Residual: the beauty minus "
+                                "the layers with albedo ViewLayer.Denoising Albedo" })
+        EXPECT_NE(res.out.find(needle), std::string::npos) << "-v lacks '" << needle << "':\n"
+                                                           << res.out;
+    EXPECT_EQ(res.out.find("ViewLayer.Trans"), std::string::npos) << "no Trans passes were written";
+
+    ImageBuf out(path("out.exr"));
+    ASSERT_TRUE(out.read(0, 0, true, TypeFloat)) << out.geterror();
+    const ImageSpec& s = out.spec();
+    const int combined = s.channelindex("ViewLayer.Combined.R");
+    ImageBuf sum = constant(0.0f);
+    for (const char* layer : { "ViewLayer.Diff", "ViewLayer.Gloss", "ViewLayer.Residual" }) {
+        const int c = s.channelindex(std::string(layer) + ".R");
+        ASSERT_GE(c, 0) << "--aovs must write " << layer;
+        ImageBuf l;
+        ImageBufAlgo::channels(l, out, 3, { c, c + 1, c + 2 });
+        sum = ImageBufAlgo::add(sum, l);
+    }
+    EXPECT_LT(max_rel_diff(out, sum, combined, 0), 1e-5f)
+        << "the denoised layers written with --aovs must add up to the denoised beauty";
+    ImageBuf beauty;
+    ImageBufAlgo::channels(beauty, out, 3, { combined, combined + 1, combined + 2 });
+    EXPECT_LT(synth::rel_mse(beauty, r.clean) * 3.0, synth::rel_mse(r.beauty, r.clean));
+}
+
+
+TEST_F(LayersCli, ArnoldStyleAovsSinglePartAndMultipart)
+{
+    LobeRender r;
+    std::vector<ImageBuf> keep;
+    std::vector<Channel> ch = arnold_channels(r, keep);
+    ImageBuf one = assemble(ch);
+    ASSERT_TRUE(one.write(path("arnold.exr"))) << one.geterror();
+
+    // The same AOVs as a multipart EXR: the beauty in part "rgba" (R,G,B,A,
+    // N, Z), each AOV in a part named after it with channels R,G,B.
+    {
+        std::vector<ImageSpec> specs;
+        std::vector<std::vector<Channel>> parts;
+        parts.push_back({ ch[0], ch[1], ch[2], ch[3] });
+        for (size_t i = 16; i < ch.size(); ++i)
+            parts[0].push_back(ch[i]);
+        for (size_t a = 0; a < 4; ++a) {
+            std::vector<Channel> p(ch.begin() + 4 + 3 * long(a), ch.begin() + 7 + 3 * long(a));
+            for (Channel& c : p)
+                c.name = c.name.substr(c.name.find('.') + 1);
+            parts.push_back(p);
+        }
+        const char* names[] = { "rgba", "diffuse", "diffuse_albedo", "specular", "specular_albedo" };
+        std::vector<ImageBuf> bufs;
+        for (size_t i = 0; i < parts.size(); ++i) {
+            bufs.push_back(assemble(parts[i]));
+            ImageSpec spec = bufs.back().spec();
+            spec.attribute("name", names[i]);
+            specs.push_back(spec);
+        }
+        auto outp = ImageOutput::create(path("multipart.exr"));
+        ASSERT_TRUE(outp && outp->supports("multiimage"));
+        ASSERT_TRUE(outp->open(path("multipart.exr"), int(specs.size()), specs.data()))
+            << outp->geterror();
+        for (size_t i = 0; i < bufs.size(); ++i) {
+            if (i > 0) {
+                ASSERT_TRUE(outp->open(path("multipart.exr"), specs[i],
+                                       ImageOutput::AppendSubimage));
+            }
+            ASSERT_TRUE(bufs[i].write(outp.get())) << bufs[i].geterror();
+        }
+        outp->close();
+    }
+
+    ImageBuf results[2];
+    const char* files[] = { "arnold.exr", "multipart.exr" };
+    for (int f = 0; f < 2; ++f) {
+        const std::string out = path(std::string("out_") + files[f]);
+        RunResult res = run("--in " + path(files[f]) + " -o " + out + " --mode layers -v");
+        ASSERT_EQ(res.status, 0) << files[f] << ": " << res.err;
+        for (const char* needle : { "Arnold style", "layer     diffuse: diffuse.R",
+                                    "with albedo diffuse_albedo.R", "layer     specular",
+                                    "residual  the beauty minus the layers, not filtered",
+                                    "normal    '", "channels N.X,N.Y,N.Z", "channels Z" })
+            EXPECT_NE(res.out.find(needle), std::string::npos)
+                << files[f] << ": -v lacks '" << needle << "':\n"
+                << res.out;
+        results[f].reset(out);
+        ASSERT_TRUE(results[f].read(0, 0, true, TypeFloat)) << results[f].geterror();
+        EXPECT_EQ(results[f].nsubimages(), 1) << "the output is one multilayer part";
+        EXPECT_LT(synth::rel_mse(results[f], r.clean) * 3.0, synth::rel_mse(r.beauty, r.clean))
+            << files[f];
+    }
+    EXPECT_GE(results[1].spec().channelindex("diffuse_albedo.G"), 0)
+        << "every part's channels are carried into the output under PART.CHANNEL";
+    EXPECT_LT(max_rel_diff(results[0], results[1]), 1e-6f)
+        << "one part or many, the same channels give the same result";
+}
+
+
+TEST_F(LayersCli, SpecularDepthLayersAndExplicitLayersOverrideDetection)
+{
+    LobeRender r;
+    ImageBuf spec0 = product(r.diff_col, r.diff_z), spec1 = product(r.gloss_col, r.gloss_z);
+    ImageBuf alpha = constant(1.0f, 1);
+    std::vector<Channel> ch;
+    add_rgb(ch, "", r.beauty);
+    ch.push_back({ "A", &alpha, 0 });
+    add_rgb(ch, "spec0", spec0);
+    add_rgb(ch, "spec0_albedo", r.diff_col);
+    add_rgb(ch, "spec1", spec1);
+    add_rgb(ch, "spec1_albedo", r.gloss_col);
+    add_rgb(ch, "residual", r.emit);
+    ImageBuf img = assemble(ch);
+    ASSERT_TRUE(img.write(path("spec.exr")));
+
+    RunResult res = run("--in " + path("spec.exr") + " -o " + path("out.exr") + " --mode layers -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    for (const char* needle : { "specular depth layers", "layer     spec0: spec0.R",
+                                "layer     spec1: spec1.R", "residual  residual.R,residual.G,"
+                                "residual.B, not filtered" })
+        EXPECT_NE(res.out.find(needle), std::string::npos) << "-v lacks '" << needle << "':\n"
+                                                           << res.out;
+
+    // --layer replaces the detected layers (and implies --mode layers);
+    // --residual the residual.
+    res = run("--in " + path("spec.exr") + " -o " + path("out2.exr")
+              + " --layer first=spec0:spec0_albedo --residual spec1+residual -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_NE(res.out.find("mode layers: 1 layer(s) (--layer)"), std::string::npos) << res.out;
+    EXPECT_NE(res.out.find("layer     first: spec0.R"), std::string::npos) << res.out;
+    EXPECT_NE(res.out.find("residual  spec1.R,spec1.G,spec1.B + residual.R"), std::string::npos)
+        << res.out;
+    EXPECT_EQ(res.out.find("layer     spec1"), std::string::npos) << res.out;
+
+    expect_one_line_error(run("--in " + path("spec.exr") + " -o " + path("o.exr")
+                              + " --layer nonsense"),
+                          "--layer");
+    write_image("plain.exr", W, H, { "R", "G", "B" }, 0.5f);
+    RunResult none = run("--in " + path("plain.exr") + " -o " + path("o.exr") + " --mode layers");
+    expect_one_line_error(none, "no layers found");
+}
+
+
+TEST_F(LayersCli, CryptomatteRanksAreTheObjectIdGuide)
+{
+    synth::Scene s = synth::two_objects_cryptomatte(W, H, { 16, 606 }, 0.2f);
+    ImageBuf alpha = constant(1.0f, 1);
+    std::vector<Channel> ch;
+    const std::string P = "ViewLayer.";
+    add_rgb(ch, P + "Combined", s.noisy);
+    ch.push_back({ P + "Combined.A", &alpha, 0 });
+    add_rgb(ch, P + "Denoising Albedo", s.albedo);
+    add_rgb(ch, P + "CryptoObject00", s.object_id, "rgba");
+    ch.push_back({ P + "IndexOB.X", &s.object_id, 0 });  // rank 0's id
+    ImageBuf img = assemble(ch);
+    img.specmod().attribute("cryptomatte/0123abc/name", "ViewLayer.CryptoObject");
+    img.specmod().attribute("cryptomatte/0123abc/manifest", "{\"a\":\"3ea0c9e0\"}");
+    ASSERT_TRUE(img.write(path("crypto.exr")));
+
+    RunResult res = run("--in " + path("crypto.exr") + " -o " + path("out.exr") + " -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_NE(res.out.find("channels ViewLayer.CryptoObject00.r,ViewLayer.CryptoObject00.g,"
+                           "ViewLayer.CryptoObject00.b,ViewLayer.CryptoObject00.a"),
+              std::string::npos)
+        << "the id guide must be the Cryptomatte rank pairs, not IndexOB:\n"
+        << res.out;
+
+    // The command gives what the library gives with the (id, coverage)
+    // guide, so the anti-aliased column weighs both objects by coverage.
+    zdenoise::Guides g;
+    g.object_id   = &s.object_id;
+    ImageBuf want = zdenoise::denoise(s.noisy, s.albedo, g);
+    ImageBuf out(path("out.exr"));
+    ASSERT_TRUE(out.read(0, 0, true, TypeFloat));
+    EXPECT_LT(max_rel_diff(out, want), 1e-6f);
+    const int blend = s.edge_x - 1;
+    for (int x : { blend - 2, blend - 1, blend + 1, blend + 2 }) {
+        const double truth = synth::mean_luminance(s.clean, x, x + 1, 0, H);
+        const double got   = synth::mean_luminance(out, x, x + 1, 0, H);
+        EXPECT_LT(std::fabs(got - truth) / truth, 0.2) << "column " << x;
+    }
+}
+
+
+TEST_F(LayersCli, OutputTypeOptionKeepsCryptomatteFloat)
+{
+    LobeRender r;
+    ImageBuf alpha = constant(1.0f, 1);
+    std::vector<Channel> ch;
+    const std::string P = "ViewLayer.";
+    add_rgb(ch, P + "Combined", r.beauty);
+    ch.push_back({ P + "Combined.A", &alpha, 0 });
+    add_rgb(ch, P + "Denoising Albedo", r.denoising_albedo);
+    ImageBuf ranks = constant(0.25f, 4);
+    add_rgb(ch, P + "CryptoObject00", ranks, "rgba");
+    ImageBuf img = assemble(ch);
+    img.specmod().attribute("cryptomatte/0123abc/name", "ViewLayer.CryptoObject");
+    img.specmod().attribute("cryptomatte/0123abc/manifest", "{\"a\":\"3ea0c9e0\"}");
+    std::vector<TypeDesc> types(ch.size(), TypeHalf);
+    for (size_t i = 7; i < types.size(); ++i)
+        types[i] = TypeFloat;
+    img.set_write_format(types);
+    ASSERT_TRUE(img.write(path("in.exr")));
+
+    // (EXR stores channels sorted by name: look them up by name.)
+    auto type_of = [&](const std::string& file, const std::string& channel) {
+        auto in = ImageInput::open(path(file));
+        EXPECT_TRUE(in);
+        EXPECT_EQ(in->spec().get_string_attribute("cryptomatte/0123abc/manifest"),
+                  "{\"a\":\"3ea0c9e0\"}");
+        const int c = in->spec().channelindex(channel);
+        EXPECT_GE(c, 0) << channel;
+        return in->spec().channelformat(c);
+    };
+    for (const char* d : { "", "-d half", "-d float" }) {
+        RunResult res = run("--in " + path("in.exr") + " -o " + path("out.exr") + " " + d);
+        ASSERT_EQ(res.status, 0) << d << ": " << res.err;
+        const TypeDesc beauty = std::string(d) == "-d float" ? TypeFloat : TypeHalf;
+        for (size_t i = 0; i < ch.size(); ++i)
+            EXPECT_EQ(type_of("out.exr", ch[i].name), i < 7 ? beauty : TypeFloat)
+                << "'" << d << "' channel " << ch[i].name
+                << (i < 7 ? "" : ": Cryptomatte channels stay float");
+    }
+    expect_one_line_error(run("--in " + path("in.exr") + " -o " + path("o.exr") + " -d int"),
+                          "-d");
+}

@@ -58,13 +58,34 @@ Inputs (each FILE may take a channel selection, oiiotool style:
                        Do not use the guide picked by default.
   A Blender Cycles multilayer EXR (channels <layer>.Combined.R ...) needs no
   other input: Combined, Denoising Albedo, Denoising Normal, Denoising Depth
-  and IndexOB are taken from it.
+  and CryptoObject (else IndexOB) are taken from it. So are Arnold-style
+  AOVs (X with X_albedo, N, Z, crypto_object) and specular depth layers
+  (spec0..spec5 with spec0_albedo.., residual); see docs/LAYERS.md.
+
+Layers (docs/LAYERS.md):
+  --mode MODE          'layers': denoise each layer (lobe or specular depth)
+                       with its own albedo, add the residual unfiltered;
+                       'beauty': denoise the beauty with the albedo. Default:
+                       layers when --layer is given, else beauty (the better
+                       on the public benchmark; docs/LAYERS.md).
+  --layer NAME=RADIANCE:ALBEDO[:divided]
+                       A layer of the --in file (repeatable; replaces the
+                       detected layers). RADIANCE and ALBEDO are channel
+                       selections as for :ch= (a layer name or a list of
+                       channels); RADIANCE may sum sets with '+'
+                       (DiffDir+DiffInd). 'divided': the radiance is already
+                       divided by the albedo (Cycles' Dir/Ind passes).
+  --residual CHANNELS  What is added unfiltered (e.g. Emit+Env). Default: the
+                       beauty minus the layers.
+  --aovs               Also write each denoised layer as NAME.R,G,B.
 
 Output:
   -o FILE              Output image: the --in file with its radiance channels
                        denoised; every other channel and the metadata kept,
                        each channel in its input pixel type. Written to a
                        temporary file, then renamed.
+  -d TYPE              Output pixel type, 'half' or 'float' (default: each
+                       channel's input type). Cryptomatte channels stay float.
   --force              Allow the output to replace one of the inputs.
   --write-recipe FILE  Instead of denoising, write a recipe (.zdn) for these
                        options: any OpenImageIO program with the zdenoise
@@ -170,6 +191,29 @@ parse_int(const std::string& opt, const std::string& value)
     return v;
 }
 
+/// NAME=RADIANCE:ALBEDO[:divided]
+job::LayerArg
+parse_layer(const std::string& value)
+{
+    job::LayerArg layer;
+    const size_t eq = value.find('=');
+    std::vector<std::string> parts;
+    if (eq != std::string::npos)
+        parts = Strutil::splits(value.substr(eq + 1), ":");
+    if (eq == std::string::npos || eq == 0 || parts.size() < 2
+        || parts.size() > 3 || parts[0].empty() || parts[1].empty()
+        || (parts.size() == 3 && parts[2] != "divided"))
+        fail(format("--layer needs NAME=RADIANCE:ALBEDO[:divided], got '{}'",
+                    value),
+             kExitUsage);
+    layer.name     = value.substr(0, eq);
+    layer.radiance = parts[0];
+    layer.albedo   = parts[1];
+    layer.divided  = parts.size() == 3;
+    return layer;
+}
+
+
 Args
 parse_args(int argc, char* argv[])
 {
@@ -266,6 +310,30 @@ parse_args(int argc, char* argv[])
             *floats[opt] = float(parse_number(opt, value(opt)));
         } else if (ints.count(opt)) {
             *ints[opt] = parse_int(opt, value(opt));
+        } else if (opt == "--mode") {
+            const std::string mode = value(opt);
+            if (mode == "layers")
+                a.job.mode = job::Mode::Layers;
+            else if (mode == "beauty")
+                a.job.mode = job::Mode::Beauty;
+            else
+                fail(format("--mode: unknown mode '{}' (known: layers, "
+                            "beauty)",
+                            mode),
+                     kExitUsage);
+        } else if (opt == "--layer") {
+            a.job.layers.push_back(parse_layer(value(opt)));
+        } else if (opt == "--residual") {
+            a.job.residual = value(opt);
+        } else if (opt == "--aovs") {
+            a.job.write_layers = true;
+        } else if (opt == "-d") {
+            const std::string type = value(opt);
+            if (type != "half" && type != "float")
+                fail(format("-d: unknown type '{}' (known: half, float)",
+                            type),
+                     kExitUsage);
+            a.job.data_type = TypeDesc(type);
         } else if (opt == "--no-normal") {
             a.job.no_normal = true;
         } else if (opt == "--no-depth") {

@@ -19,7 +19,8 @@ role_components(Role role)
 {
     switch (role) {
     case Role::Radiance:
-    case Role::Albedo: return { { "R", "G", "B" }, { "r", "g", "b" } };
+    case Role::Albedo:
+    case Role::LayerRadiance: return { { "R", "G", "B" }, { "r", "g", "b" } };
     case Role::Normal:
         return { { "X", "Y", "Z" }, { "x", "y", "z" }, { "R", "G", "B" } };
     case Role::Depth: return { { "Z" }, { "z" }, { "V" }, { "R" }, { "Y" } };
@@ -54,6 +55,7 @@ count_fits(Role role, size_t n)
     switch (role) {
     case Role::Radiance: return n == 3 || n == 4;
     case Role::Albedo:
+    case Role::LayerRadiance:
     case Role::Normal: return n == 3;
     case Role::Depth: return n == 1;
     case Role::Variance: return n == 1 || n == 3;
@@ -68,6 +70,7 @@ count_wanted(Role role)
     switch (role) {
     case Role::Radiance: return "3 (R,G,B) or 4 (R,G,B,A)";
     case Role::Albedo:
+    case Role::LayerRadiance:
     case Role::Normal: return "3";
     case Role::Depth: return "1";
     case Role::Variance: return "1 or 3";
@@ -104,6 +107,7 @@ role_name(Role role)
     case Role::Depth: return "depth";
     case Role::ObjectId: return "object id";
     case Role::Variance: return "variance";
+    case Role::LayerRadiance: return "layer radiance";
     }
     return "?";
 }

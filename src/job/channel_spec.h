@@ -16,7 +16,15 @@ namespace zdenoise {
 namespace job {
 
 /// What a set of channels is for; decides the channel names looked for.
-enum class Role { Radiance, Albedo, Normal, Depth, ObjectId, Variance };
+enum class Role {
+    Radiance,
+    Albedo,
+    Normal,
+    Depth,
+    ObjectId,
+    Variance,
+    LayerRadiance  ///< a layer's or the residual's R,G,B (no alpha)
+};
 
 const char*
 role_name(Role role);
@@ -29,8 +37,8 @@ role_name(Role role);
 ///                     ("Denoising Albedo.R") matching exactly one channel;
 ///   - "LAYER"       : a layer/pass name: LAYER.R, LAYER.G, ... (the role's
 ///                     component names), matched as a suffix after a '.'.
-/// Radiance takes 3 channels plus an optional alpha (A) after them; albedo
-/// and normal 3; depth 1; variance 1 or 3; object id 1 or an even number
+/// Radiance takes 3 channels plus an optional alpha (A) after them; albedo,
+/// layer radiance and normal 3; depth 1; variance 1 or 3; object id 1 or an even number
 /// ((id, coverage) pairs).
 /// On failure returns false with a message naming the channels missing.
 bool

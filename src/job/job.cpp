@@ -13,6 +13,7 @@
 #include <OpenImageIO/timer.h>
 
 #include "channel_spec.h"
+#include "layer_conventions.h"
 
 namespace zdenoise {
 namespace job {
@@ -34,31 +35,98 @@ fail(const std::string& message)
 }
 
 
+/// One input file: the channels of all its parts (a multipart EXR's part
+/// k > 0 contributes its channels C as PART.C unless already so named), as
+/// float, with each channel's pixel type in the file.
+struct InputFile {
+    ImageBuf image;
+    std::vector<TypeDesc> formats;
+};
+
+
 /// Input files, each read once however many roles it serves.
 class InputFiles {
 public:
-    ImageBuf& get(const std::string& path)
+    InputFile& get(const std::string& path)
     {
         auto it = m_files.find(path);
         if (it != m_files.end())
             return *it->second;
         if (!Filesystem::exists(path))
             fail(format("cannot read '{}': no such file", path));
-        auto buf = std::make_unique<ImageBuf>(path);
-        if (!buf->init_spec(path, 0, 0))
-            fail(format("cannot read '{}': {}", path,
-                        one_line(buf->geterror())));
-        if (buf->deep())
-            fail(format("cannot read '{}': deep images are not supported",
-                        path));
-        if (!buf->read(0, 0, true, TypeFloat))
-            fail(format("cannot read '{}': {}", path,
-                        one_line(buf->geterror())));
-        return *(m_files[path] = std::move(buf));
+        auto file = std::make_unique<InputFile>();
+        file->image = read_part(path, 0, file->formats);
+        const int parts = file->image.nsubimages();
+        for (int part = 1; part < parts; ++part)
+            append_part(*file, path, part);
+        return *(m_files[path] = std::move(file));
     }
 
+    ImageBuf& image(const std::string& path) { return get(path).image; }
+
 private:
-    std::map<std::string, std::unique_ptr<ImageBuf>> m_files;
+    static ImageBuf read_part(const std::string& path, int part,
+                              std::vector<TypeDesc>& formats)
+    {
+        ImageBuf buf(path, part);
+        if (!buf.init_spec(path, part, 0))
+            fail(format("cannot read '{}': {}", path,
+                        one_line(buf.geterror())));
+        if (buf.deep())
+            fail(format("cannot read '{}': deep images are not supported",
+                        path));
+        if (!buf.read(part, 0, true, TypeFloat))
+            fail(format("cannot read '{}': {}", path,
+                        one_line(buf.geterror())));
+        const ImageSpec& native = buf.nativespec();
+        formats.resize(size_t(native.nchannels), native.format);
+        for (size_t c = 0; c < native.channelformats.size(); ++c)
+            formats[c] = native.channelformats[c];
+        return buf;
+    }
+
+    static void append_part(InputFile& file, const std::string& path,
+                            int part)
+    {
+        std::vector<TypeDesc> formats;
+        ImageBuf buf = read_part(path, part, formats);
+        const ImageSpec& spec = buf.spec();
+        const std::string name = spec.get_string_attribute("name");
+        const ROI a = file.image.roi(), b = buf.roi();
+        if (a.xbegin != b.xbegin || a.xend != b.xend || a.ybegin != b.ybegin
+            || a.yend != b.yend)
+            fail(format("'{}': part {} ('{}') is {}x{}{:+d}{:+d}, part 0 is "
+                        "{}x{}{:+d}{:+d}: zdenoise needs every part to cover "
+                        "the same pixels",
+                        path, part, name, b.width(), b.height(), b.xbegin,
+                        b.ybegin, a.width(), a.height(), a.xbegin, a.ybegin));
+        std::vector<std::string> names = file.image.spec().channelnames;
+        for (const std::string& c : spec.channelnames)
+            names.push_back(name.empty() || Strutil::starts_with(c, name + ".")
+                                ? c
+                                : name + "." + c);
+        ImageSpec merged_spec = file.image.spec();
+        for (const ParamValue& p : spec.extra_attribs)
+            if (!merged_spec.find_attribute(p.name()))
+                merged_spec.extra_attribs.push_back(p);
+        ImageBuf merged;
+        if (!ImageBufAlgo::channel_append(merged, file.image, buf))
+            fail(format("cannot read '{}': {}", path,
+                        one_line(merged.geterror())));
+        merged_spec.nchannels    = merged.spec().nchannels;
+        merged_spec.channelnames = names;
+        merged_spec.alpha_channel = file.image.spec().alpha_channel;
+        merged_spec.z_channel     = file.image.spec().z_channel;
+        merged_spec.erase_attribute("name");
+        merged_spec.erase_attribute("oiio:subimagename");
+        merged_spec.erase_attribute("oiio:subimages");
+        merged.specmod() = merged_spec;
+        file.image = std::move(merged);
+        file.formats.insert(file.formats.end(), formats.begin(),
+                            formats.end());
+    }
+
+    std::map<std::string, std::unique_ptr<InputFile>> m_files;
 };
 
 
@@ -74,7 +142,7 @@ load_role(InputFiles& files, const InputArg& arg, Role role,
           const ImageBuf* reference, const std::string& reference_path)
 {
     RoleImage r;
-    ImageBuf& src = files.get(arg.path);
+    ImageBuf& src = files.image(arg.path);
     std::string err;
     if (!select_channels(src.spec().channelnames, arg.channels, role,
                               r.indices, err))
@@ -89,7 +157,7 @@ load_role(InputFiles& files, const InputArg& arg, Role role,
                     a.xbegin, a.ybegin, reference_path, b.width(), b.height(),
                     b.xbegin, b.ybegin));
     std::vector<std::string> names;
-    if (role == Role::Radiance)
+    if (role == Role::Radiance || role == Role::LayerRadiance)
         names = { "R", "G", "B", "A" };
     names.resize(r.indices.size());
     if (!ImageBufAlgo::channels(r.image, src, int(r.indices.size()),
@@ -100,34 +168,23 @@ load_role(InputFiles& files, const InputArg& arg, Role role,
 }
 
 
-/// Fill in the defaults for a Blender Cycles multilayer input.
+/// Fill in the defaults of the convention the input follows.
 void
-apply_cycles_defaults(Job& j, const ImageSpec& spec,
-                      std::vector<std::string>& log)
+apply_defaults(Job& j, const Convention& conv, std::vector<std::string>& log)
 {
-    std::string prefix;
-    if (!cycles_prefix(spec.channelnames, prefix))
+    if (conv.name.empty())
         return;
-    log.push_back(format("'{}' is a Blender Cycles multilayer EXR (layer "
-                         "'{}')",
-                         j.in.path, prefix));
-    auto has = [&](const std::string& layer, const char* comp) {
-        for (const std::string& n : spec.channelnames)
-            if (n == prefix + layer + "." + comp)
-                return true;
-        return false;
-    };
+    log.push_back(format("'{}' is a {}", j.in.path, conv.name));
     if (j.in.channels.empty())
-        j.in.channels = prefix + "Combined";
-    auto pick = [&](InputArg& arg, bool disabled, const char* layer,
-                    const char* comp) {
-        if (!arg.given && !disabled && has(layer, comp))
-            arg = { j.in.path, prefix + layer, true };
+        j.in.channels = conv.beauty;
+    auto pick = [&](InputArg& arg, bool disabled, const std::string& sel) {
+        if (!arg.given && !disabled && !sel.empty())
+            arg = { j.in.path, sel, true };
     };
-    pick(j.albedo, false, "Denoising Albedo", "R");
-    pick(j.normal, j.no_normal, "Denoising Normal", "X");
-    pick(j.depth, j.no_depth, "Denoising Depth", "Z");
-    pick(j.id, j.no_id, "IndexOB", "X");
+    pick(j.albedo, false, conv.albedo);
+    pick(j.normal, j.no_normal, conv.normal);
+    pick(j.depth, j.no_depth, conv.depth);
+    pick(j.id, j.no_id, conv.id);
 }
 
 
@@ -139,15 +196,17 @@ resolve_colour(const Job& j, InputFiles& files, colour::ColourConfig& config,
                colour::JobSpaces& spaces, std::vector<std::string>& log)
 {
     std::string err;
+    // Layers may come without an albedo of the beauty: then the input's.
+    const InputArg& albedo = j.albedo.given ? j.albedo : j.in;
     if (!j.colour.any_given() && !std::getenv("OCIO")
         && colour::bundled_config_path().empty()) {
         log.push_back("no colour config found: pixels filtered as they are");
         return false;
     }
     if (!config.load(j.colour.config, err)
-        || !colour::resolve_job_spaces(config, j.colour, files.get(j.in.path),
-                                       files.get(j.albedo.path),
-                                       j.albedo.path == j.in.path, spaces,
+        || !colour::resolve_job_spaces(config, j.colour, files.image(j.in.path),
+                                       files.image(albedo.path),
+                                       albedo.path == j.in.path, spaces,
                                        log, err))
         fail(err);
     return true;
@@ -164,22 +223,203 @@ channel_list(const ImageSpec& spec, const std::vector<int>& idx)
 }
 
 
+/// The sum of the selections of `selections` ('+' between them) of the
+/// --in file, each R,G,B.
+ImageBuf
+load_sum(InputFiles& files, const std::string& path,
+         const std::string& selections, const ImageBuf& noisy,
+         std::string& shown)
+{
+    ImageBuf sum;
+    for (const std::string& part : Strutil::splits(selections, "+")) {
+        RoleImage r = load_role(files, { path, part, true },
+                                Role::LayerRadiance, &noisy, path);
+        shown += (shown.empty() ? "" : " + ")
+                 + channel_list(noisy.spec(), r.indices);
+        if (!sum.initialized())
+            sum = std::move(r.image);
+        else if (!ImageBufAlgo::add(sum, sum, r.image))
+            fail(format("'{}': {}", path, one_line(sum.geterror())));
+    }
+    return sum;
+}
+
+
+/// The layers of a layered denoise, read.
+struct LoadedLayers {
+    std::vector<ImageBuf> radiance, albedo, denoised;
+    std::vector<FilterStats> stats;
+    ImageBuf residual;
+};
+
+/// Read the layers and the residual; the residual is, unless selected, the
+/// beauty minus the sum of the unfiltered layers, so that nothing of the
+/// beauty is lost (in Cycles: Emit + Env, and any lobe whose passes were
+/// not written). With `residual_albedo`, the residual becomes one more
+/// layer, denoised with that albedo (see Convention::residual_albedo).
+std::vector<Layer>
+load_layers(InputFiles& files, const Job& j,
+            const std::vector<LayerArg>& args, const std::string& residual,
+            const std::string& residual_albedo,
+            const std::string& residual_layer, const ImageBuf& noisy,
+            const ImageBuf& beauty, LoadedLayers& l,
+            std::vector<std::string>& log)
+{
+    const size_t n = args.size() + (residual_albedo.empty() ? 0 : 1);
+    l.radiance.resize(n);
+    l.albedo.resize(n);
+    l.denoised.resize(n);
+    l.stats.resize(n);
+    std::vector<Layer> layers(n);
+    auto add_layer = [&](size_t i, const std::string& name, bool divided) {
+        layers[i].name     = name;
+        layers[i].radiance = &l.radiance[i];
+        layers[i].albedo   = &l.albedo[i];
+        layers[i].divided  = divided;
+        layers[i].denoised = &l.denoised[i];
+        layers[i].stats    = &l.stats[i];
+    };
+    for (size_t i = 0; i < args.size(); ++i) {
+        const LayerArg& a = args[i];
+        std::string shown_radiance, shown_albedo;
+        l.radiance[i] = load_sum(files, j.in.path, a.radiance, noisy,
+                                 shown_radiance);
+        l.albedo[i]   = load_sum(files, j.in.path, a.albedo, noisy,
+                                 shown_albedo);
+        add_layer(i, a.name, a.divided);
+        log.push_back(format("  layer     {}: {} with albedo {}{}", a.name,
+                             shown_radiance, shown_albedo,
+                             a.divided ? " (divided by it)" : ""));
+    }
+    std::string shown_residual;
+    if (!residual.empty()) {
+        l.residual = load_sum(files, j.in.path, residual, noisy,
+                              shown_residual);
+    } else {
+        std::vector<Layer> unfiltered(layers.begin(),
+                                      layers.begin() + args.size());
+        for (Layer& layer : unfiltered) {
+            layer.filter   = false;
+            layer.denoised = nullptr;
+            layer.stats    = nullptr;
+        }
+        ImageBuf sum;
+        ROI rgb     = beauty.roi();
+        rgb.chbegin = 0;
+        rgb.chend   = 3;
+        // RGB only: the beauty's alpha would mark the residual's pixels
+        // "no surface" for the filter.
+        l.residual.reset(ImageSpec(rgb, TypeFloat));
+        if (!layered_denoise(sum, unfiltered, nullptr, {}, j.filter,
+                             nullptr, rgb, j.threads)
+            || !ImageBufAlgo::sub(l.residual, beauty, sum, rgb, j.threads))
+            fail(format("layers of '{}': {}", j.in.path,
+                        one_line(sum.has_error() ? sum.geterror()
+                                                 : l.residual.geterror())));
+        shown_residual = "the beauty minus the layers";
+    }
+    if (residual_albedo.empty()) {
+        log.push_back("  residual  " + shown_residual + ", not filtered");
+        return layers;
+    }
+    const size_t i = n - 1;
+    std::string shown_albedo;
+    l.radiance[i].swap(l.residual);  // l.residual: uninitialized again
+    l.albedo[i] = load_sum(files, j.in.path, residual_albedo, noisy,
+                           shown_albedo);
+    add_layer(i, residual_layer, false);
+    log.push_back(format("  layer     {}: {} with albedo {}", residual_layer,
+                         shown_residual, shown_albedo));
+    return layers;
+}
+
+
+/// Write `rgb` (3 channels) into the channels `names` of `out`, appending
+/// those that do not exist (in pixel type `type`).
+void
+put_channels(ImageBuf& out, std::vector<TypeDesc>& formats,
+             const ImageBuf& rgb, const std::vector<std::string>& names,
+             TypeDesc type)
+{
+    const ROI roi = out.roi();
+    std::vector<float> plane(roi.npixels());
+    for (int c = 0; c < 3; ++c) {
+        int dc = out.spec().channelindex(names[size_t(c)]);
+        if (dc < 0) {
+            ImageBuf one, appended;
+            if (!ImageBufAlgo::channels(one, rgb, 1, { c }, {},
+                                        { names[size_t(c)] })
+                || !ImageBufAlgo::channel_append(appended, out, one))
+                fail(format("cannot add channel '{}': {}", names[size_t(c)],
+                            one_line(appended.geterror())));
+            ImageSpec spec    = out.spec();  // keep the metadata
+            spec.nchannels    = appended.nchannels();
+            spec.channelnames.push_back(names[size_t(c)]);
+            appended.specmod() = spec;
+            out = std::move(appended);
+            formats.push_back(type);
+            continue;
+        }
+        rgb.get_pixels(ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1,
+                           c, c + 1),
+                       TypeFloat, plane.data());
+        out.set_pixels(ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1,
+                           dc, dc + 1),
+                       TypeFloat, plane.data());
+    }
+}
+
+
+/// Each output channel's pixel type: the input's, or `data_type`;
+/// Cryptomatte channels always float (their ids are float bit patterns).
+void
+set_write_formats(ImageBuf& out, std::vector<TypeDesc> formats,
+                  TypeDesc data_type)
+{
+    std::vector<std::string> crypto_layers;
+    for (const ParamValue& p : out.spec().extra_attribs) {
+        const std::string name = p.name().string();
+        if (Strutil::starts_with(name, "cryptomatte/")
+            && Strutil::ends_with(name, "/name"))
+            crypto_layers.push_back(out.spec().get_string_attribute(name));
+    }
+    for (size_t c = 0; c < formats.size(); ++c) {
+        if (data_type != TypeUnknown)
+            formats[c] = data_type;
+        if (is_cryptomatte_channel(out.spec().channelnames[c], crypto_layers))
+            formats[c] = TypeFloat;
+    }
+    out.set_write_format(formats);
+}
+
+
 void
 run(Job j, JobResult& result)
 {
     InputFiles files;
     Timer read_timer;
-    ImageBuf& noisy = files.get(j.in.path);
-    apply_cycles_defaults(j, noisy.spec(), result.log);
-    if (!j.albedo.given)
+    InputFile& input = files.get(j.in.path);
+    ImageBuf& noisy  = input.image;
+    const Convention conv = detect_convention(noisy.spec().channelnames);
+    apply_defaults(j, conv, result.log);
+    const std::vector<LayerArg>& layer_args = j.layers.empty() ? conv.layers
+                                                               : j.layers;
+    if (j.mode == Mode::Layers && layer_args.empty())
+        fail(format("--mode layers: no layers found in '{}' (see "
+                    "docs/LAYERS.md); give them with --layer",
+                    j.in.path));
+    const bool layered = j.mode == Mode::Layers
+                         || (j.mode == Mode::Auto && !j.layers.empty());
+    if (!layered && !j.albedo.given)
         fail(format("no albedo: '{}' has no Denoising Albedo pass; give "
                     "--albedo FILE",
                     j.in.path));
 
     RoleImage radiance = load_role(files, j.in, Role::Radiance, nullptr,
                                    "");
-    RoleImage albedo   = load_role(files, j.albedo, Role::Albedo, &noisy,
-                                   j.in.path);
+    RoleImage albedo;
+    if (!layered)
+        albedo = load_role(files, j.albedo, Role::Albedo, &noisy, j.in.path);
     struct Optional {
         const InputArg* arg;
         Role role;
@@ -208,6 +448,14 @@ run(Job j, JobResult& result)
         if (image.initialized() && !config.convert_rgb(image, from, to, err))
             fail(format("'{}': {}", arg.path, one_line(err)));
     };
+    // Layers are filtered in the input's own space: a divided layer is a
+    // quotient per channel, which a change of primaries does not carry.
+    if (managed && layered
+        && (spaces.working != spaces.input || spaces.output != spaces.input))
+        fail(format("--mode layers filters in the input's colour space "
+                    "('{}'): give --working-colorspace and --ocolorspace "
+                    "as the input's, or use --mode beauty",
+                    spaces.input));
     if (managed) {
         convert(radiance.image, spaces.input, spaces.working, j.in);
         convert(albedo.image, spaces.albedo, spaces.working, j.albedo);
@@ -220,7 +468,6 @@ run(Job j, JobResult& result)
             result.log.push_back("  variance  used as given (not converted "
                                  "to the working space)");
     }
-    result.read_seconds = read_timer();
 
     Guides guides;
     auto guide = [](const Optional& o) {
@@ -241,49 +488,90 @@ run(Job j, JobResult& result)
         if (r.image.initialized())
             result.log.push_back(
                 format("  {:<9} '{}' channels {}", what, arg.path,
-                       channel_list(files.get(arg.path).spec(), r.indices)));
+                       channel_list(files.image(arg.path).spec(),
+                                    r.indices)));
     };
     show("radiance", j.in, radiance);
     show("albedo", j.albedo, albedo);
     for (const Optional& o : optional)
         show(o.label, *o.arg, o.image);
-    if (!guides.variance && !guides.half_a)
-        result.log.push_back("  noise     estimated from the image");
+
+    LoadedLayers loaded;
+    std::vector<Layer> layers;
+    if (layered) {
+        result.log.push_back(format("mode layers: {} layer(s){}",
+                                    layer_args.size(),
+                                    j.layers.empty() ? "" : " (--layer)"));
+        // An explicit residual (--residual) or explicit layers (--layer)
+        // are the user's decomposition: the residual is then not filtered.
+        const bool own = !j.residual.empty() || !j.layers.empty();
+        const std::string residual = j.residual.empty() ? conv.residual
+                                                        : j.residual;
+        layers = load_layers(files, j, layer_args, residual,
+                             own ? std::string() : conv.residual_albedo,
+                             conv.residual_layer, noisy, radiance.image,
+                             loaded, result.log);
+        result.log.push_back(
+            guides.variance || guides.half_a
+                ? "  noise     estimated per layer (--variance and --halves "
+                  "describe the beauty, not a layer)"
+                : "  noise     estimated per layer");
+    } else {
+        result.log.push_back("mode beauty");
+        if (!guides.variance && !guides.half_a)
+            result.log.push_back("  noise     estimated from the image");
+    }
+    result.read_seconds = read_timer();
     result.log.push_back("parameters " + describe(j.filter));
 
     Timer denoise_timer;
     ImageBuf denoised;
-    if (!denoise(denoised, radiance.image, albedo.image, guides, j.filter,
-                 &result.stats, {}, j.threads))
+    const bool ok = layered
+                        ? layered_denoise(denoised, layers,
+                                          loaded.residual.initialized()
+                                              ? &loaded.residual
+                                              : nullptr,
+                                          guides, j.filter, &result.stats,
+                                          {}, j.threads)
+                        : denoise(denoised, radiance.image, albedo.image,
+                                  guides, j.filter, &result.stats, {},
+                                  j.threads);
+    if (!ok)
         fail(format("denoising '{}' failed: {}", j.in.path,
                     one_line(denoised.geterror())));
     result.denoise_seconds = denoise_timer();
     if (managed)
         convert(denoised, spaces.working, spaces.output, j.in);
 
-    // The output: the input file with its radiance RGB replaced, each
-    // channel written in its input pixel type.
+    // The output: the input file with its radiance RGB replaced (and the
+    // denoised layers added with --aovs), each channel written in its input
+    // pixel type unless -d says otherwise.
     ImageBuf& out = noisy;
-    const ROI roi = out.roi();
-    std::vector<float> plane(roi.npixels());
-    for (int c = 0; c < 3; ++c) {
-        denoised.get_pixels(ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0,
-                                1, c, c + 1),
-                            TypeFloat, plane.data());
-        const int dc = radiance.indices[size_t(c)];
-        out.set_pixels(ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1,
-                           dc, dc + 1),
-                       TypeFloat, plane.data());
-    }
-    const ImageSpec& native = out.nativespec();
-    if (!native.channelformats.empty())
-        out.set_write_format(native.channelformats);
-    else
-        out.set_write_format(native.format);
+    std::vector<TypeDesc> formats = input.formats;
+    const std::vector<std::string>& names = out.spec().channelnames;
+    const std::vector<std::string> beauty
+        = { names[size_t(radiance.indices[0])],
+            names[size_t(radiance.indices[1])],
+            names[size_t(radiance.indices[2])] };
+    const TypeDesc beauty_type = formats[size_t(radiance.indices[0])];
+    put_channels(out, formats, denoised, beauty, beauty_type);
+    if (j.write_layers)
+        for (size_t i = 0; i < layers.size(); ++i) {
+            const std::string& n = layers[i].name;
+            put_channels(out, formats, loaded.denoised[i],
+                         { n + ".R", n + ".G", n + ".B" }, beauty_type);
+            const FilterStats& st = loaded.stats[i];
+            result.log.push_back(format(
+                "  layer {} written as {}.R,G,B (mean radius {:.2f})", n, n,
+                st.mean_radius));
+        }
+    set_write_formats(out, formats, j.data_type);
     if (managed)
         colour::tag_colour_space(out.specmod(), spaces.output, spaces.input);
     out.specmod().attribute("zdenoise.version", ZDENOISE_VERSION_STRING);
-    out.specmod().attribute("zdenoise.parameters", describe(j.filter));
+    out.specmod().attribute("zdenoise.parameters",
+                            describe(j.filter)
+                                + (layered ? " mode=layers" : " mode=beauty"));
     result.image = std::move(out);
 }
 

@@ -3,9 +3,11 @@
 //
 // A denoise job as the command line (and the OIIO plugin) describe it:
 // input files with channel selections, filter options. run_job() reads
-// the files, picks the channels (with the Blender Cycles defaults),
-// denoises, and assembles the output image: the noisy input file with its
-// radiance RGB replaced, every other channel and the metadata kept.
+// the files, picks the channels (with the defaults of the conventions in
+// layer_conventions.h), denoises the beauty or its layers, and assembles
+// the output image: the noisy input file with its radiance RGB replaced
+// (and, on request, the denoised layers added), every other channel and the
+// metadata kept.
 
 #pragma once
 
@@ -17,6 +19,7 @@
 #include <zdenoise/zdenoise.h>
 
 #include "../../ocio/colour.h"
+#include "layer_conventions.h"
 
 namespace zdenoise {
 namespace job {
@@ -28,11 +31,30 @@ struct InputArg {
     bool given = false;
 };
 
+/// Beauty: denoise the beauty with the albedo. Layers: denoise each layer
+/// with its albedo and sum them with the residual (layered_denoise()).
+/// Auto: layers when --layer gives them, else beauty (measured on the
+/// public benchmark, docs/LAYERS.md: layers win on cornell_textured but
+/// lose slightly on newspaper and zigzag_steps).
+enum class Mode { Auto, Beauty, Layers };
+
 struct Job {
     InputArg in, albedo, normal, depth, id, variance, half_a, half_b;
     bool no_normal = false, no_depth = false, no_id = false;
     FilterOptions filter;
     colour::ColourOptions colour;
+    Mode mode = Mode::Auto;
+    /// Layers of the --in file (--layer); when given they replace the
+    /// detected ones.
+    std::vector<LayerArg> layers;
+    /// The residual selection of the --in file ('+' sums sets); empty: the
+    /// convention's, else the beauty minus the layers.
+    std::string residual;
+    /// Also write each denoised layer as NAME.R,G,B (--aovs).
+    bool write_layers = false;
+    /// Pixel type of the output channels; TypeUnknown keeps each input
+    /// channel's. Cryptomatte channels are float whatever this says.
+    OIIO::TypeDesc data_type = OIIO::TypeUnknown;
     int threads = 0;  ///< 0: OIIO's "threads" attribute
 };
 

@@ -1,0 +1,211 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+
+#include "layer_conventions.h"
+
+#include <algorithm>
+#include <cctype>
+#include <set>
+
+#include <OpenImageIO/strutil.h>
+
+#include "channel_spec.h"
+
+namespace zdenoise {
+namespace job {
+
+using OIIO::Strutil::fmt::format;
+
+namespace {
+
+bool
+has_channel(const std::vector<std::string>& names, const std::string& name)
+{
+    return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+/// Does the layer have all of the components, in upper or lower case?
+bool
+has_layer(const std::vector<std::string>& names, const std::string& layer,
+          const char* comps)
+{
+    auto all = [&](bool lower) {
+        for (const char* c = comps; *c; ++c) {
+            const char comp = char(lower ? std::tolower(*c) : *c);
+            if (!has_channel(names, layer + "." + comp))
+                return false;
+        }
+        return true;
+    };
+    return all(false) || all(true);
+}
+
+/// The layer part (all but the last '.'-separated part) of each channel, in
+/// order of first appearance.
+std::vector<std::string>
+layer_paths(const std::vector<std::string>& names)
+{
+    std::vector<std::string> layers;
+    std::set<std::string> seen;
+    for (const std::string& n : names) {
+        const size_t dot = n.rfind('.');
+        if (dot == std::string::npos || dot == 0)
+            continue;
+        std::string layer = n.substr(0, dot);
+        if (seen.insert(layer).second)
+            layers.push_back(layer);
+    }
+    return layers;
+}
+
+std::string
+lower(std::string s)
+{
+    for (char& c : s)
+        c = char(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+}
+
+/// The last '.'-separated part of a layer path.
+std::string
+last_part(const std::string& layer)
+{
+    const size_t dot = layer.rfind('.');
+    return dot == std::string::npos ? layer : layer.substr(dot + 1);
+}
+
+
+Convention
+cycles_convention(const std::vector<std::string>& names,
+                  const std::string& prefix)
+{
+    Convention c;
+    c.name   = format("Blender Cycles multilayer EXR (layer '{}')", prefix);
+    c.beauty = prefix + "Combined";
+    auto pass = [&](const char* name, const char* comps) {
+        return has_layer(names, prefix + name, comps) ? prefix + name
+                                                      : std::string();
+    };
+    c.albedo = pass("Denoising Albedo", "RGB");
+    c.normal = pass("Denoising Normal", "XYZ");
+    c.depth  = pass("Denoising Depth", "Z");
+    c.id     = cryptomatte_object_selection(names);
+    if (c.id.empty())
+        c.id = pass("IndexOB", "X");
+    // Cycles writes each lobe's lighting divided by its colour:
+    // Combined = DiffCol*(DiffDir+DiffInd) + GlossCol*(...) + TransCol*(...)
+    //            + Emit + Env.
+    for (const char* lobe : { "Diff", "Gloss", "Trans" }) {
+        const std::string colour = pass((std::string(lobe) + "Col").c_str(),
+                                        "RGB");
+        std::string lighting;
+        for (const char* part : { "Dir", "Ind" }) {
+            const std::string p = pass((lobe + std::string(part)).c_str(),
+                                       "RGB");
+            if (!p.empty())
+                lighting += (lighting.empty() ? "" : "+") + p;
+        }
+        if (!colour.empty() && !lighting.empty())
+            c.layers.push_back({ prefix + lobe, lighting, colour, true });
+    }
+    c.residual_albedo = c.albedo;
+    c.residual_layer  = prefix + "Residual";
+    return c;
+}
+
+
+/// AOVs X with an X_albedo (Arnold, and our specular depth layers).
+Convention
+aov_convention(const std::vector<std::string>& names)
+{
+    Convention c;
+    for (const std::string& layer : layer_paths(names)) {
+        if (!OIIO::Strutil::ends_with(layer, "_albedo")
+            || !has_layer(names, layer, "RGB"))
+            continue;
+        const std::string x = layer.substr(0, layer.size() - 7);
+        if (x.empty())
+            continue;
+        if (has_layer(names, x, "RGB"))
+            c.layers.push_back({ x, x, layer, false });
+        else if (has_layer(names, x + "_direct", "RGB")
+                 && has_layer(names, x + "_indirect", "RGB"))
+            c.layers.push_back(
+                { x, x + "_direct+" + x + "_indirect", layer, false });
+    }
+    if (c.layers.empty())
+        return c;
+    const bool specular_depth = c.layers.front().name == "spec0";
+    c.name = specular_depth ? "specular depth layers (spec0..spec5)"
+                            : "AOVs with *_albedo (Arnold style)";
+    if (has_layer(names, "residual", "RGB"))
+        c.residual = "residual";
+    for (const char* albedo : { "albedo", "denoise_albedo" })
+        if (c.albedo.empty() && has_layer(names, albedo, "RGB"))
+            c.albedo = albedo;
+    for (const char* normal : { "N", "normal" })
+        if (c.normal.empty()
+            && (has_layer(names, normal, "XYZ")
+                || has_layer(names, normal, "RGB")))
+            c.normal = normal;
+    if (has_channel(names, "Z"))
+        c.depth = "Z";
+    c.id = cryptomatte_object_selection(names);
+    return c;
+}
+
+}  // namespace
+
+
+std::string
+cryptomatte_object_selection(const std::vector<std::string>& names)
+{
+    // The layer whose last part, lowercased and without '_', is
+    // "cryptoobject00" starts the ranks; its siblings 01, 02, ... follow.
+    for (const std::string& layer : layer_paths(names)) {
+        std::string key = lower(last_part(layer));
+        key.erase(std::remove(key.begin(), key.end(), '_'), key.end());
+        if (key != "cryptoobject00")
+            continue;
+        const std::string base = layer.substr(0, layer.size() - 2);
+        std::string selection;
+        for (int rank = 0; rank < 100; ++rank) {
+            const std::string l = format("{}{:02d}", base, rank);
+            if (!has_layer(names, l, "RGBA"))
+                break;
+            const bool upper = has_channel(names, l + ".R");
+            for (const char* c = "RGBA"; *c; ++c)
+                selection += (selection.empty() ? "" : ",") + l + "."
+                             + char(upper ? *c : std::tolower(*c));
+        }
+        return selection;
+    }
+    return {};
+}
+
+
+bool
+is_cryptomatte_channel(const std::string& channel,
+                       const std::vector<std::string>& layer_names)
+{
+    for (const std::string& l : layer_names)
+        if (!l.empty() && OIIO::Strutil::starts_with(channel, l))
+            return true;
+    const size_t dot = channel.rfind('.');
+    return dot != std::string::npos
+           && OIIO::Strutil::starts_with(lower(last_part(channel.substr(0, dot))),
+                                         "crypto");
+}
+
+
+Convention
+detect_convention(const std::vector<std::string>& names)
+{
+    std::string prefix;
+    if (cycles_prefix(names, prefix))
+        return cycles_convention(names, prefix);
+    return aov_convention(names);
+}
+
+}  // namespace job
+}  // namespace zdenoise

@@ -1,0 +1,76 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// The channel naming conventions zdenoise recognises with no flags: which
+// channels of a file are the beauty, its albedo, the guides, and the layers
+// (per-lobe or per-specular-depth radiance with its albedo) of layered
+// denoising. docs/LAYERS.md lists every name.
+
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace zdenoise {
+namespace job {
+
+/// One layer of a layered denoise, as channel selections of the --in file
+/// (each a selection as channel_spec.h's select_channels() takes it).
+struct LayerArg {
+    /// The layer's name; with --aovs its denoised radiance is written to the
+    /// channels NAME.R, NAME.G, NAME.B.
+    std::string name;
+    /// The radiance: one selection, or several joined by '+' that are summed
+    /// (Cycles' DiffDir+DiffInd).
+    std::string radiance;
+    /// The albedo (colour) selection.
+    std::string albedo;
+    /// The radiance is already divided by the albedo (Cycles' Dir/Ind).
+    bool divided = false;
+};
+
+/// What a file's channel names say, by the first convention that matches.
+struct Convention {
+    /// e.g. "Blender Cycles multilayer EXR (layer 'ViewLayer.')"; empty when
+    /// nothing was recognised.
+    std::string name;
+    /// Selections; empty = none found (beauty: the plain R,G,B[,A]).
+    std::string beauty, albedo, normal, depth, id;
+    std::vector<LayerArg> layers;
+    /// The residual selection ('+' joins sets); empty = the beauty minus the
+    /// layers.
+    std::string residual;
+    /// If not empty, the residual is denoised as one more layer with this
+    /// albedo instead of being added unfiltered: Cycles' Denoising Albedo
+    /// holds the emission of emitters (and its anti-aliasing noise at their
+    /// edges), so Emit and Env demodulated by it are smooth.
+    std::string residual_albedo;
+    /// The name of that layer (for --aovs).
+    std::string residual_layer;
+};
+
+/// Recognise, in order: a Blender Cycles multilayer EXR (<prefix>Combined),
+/// else AOVs named X with X_albedo (Arnold style, and our specular depth
+/// layers spec0..spec5 with spec0_albedo..spec5_albedo and residual).
+/// The object id guide is the Cryptomatte object layer's ranks when present.
+Convention
+detect_convention(const std::vector<std::string>& names);
+
+/// The channels of the Cryptomatte object layer's ranks, in rank order, as
+/// an explicit selection "L00.r,L00.g,L00.b,L00.a,L01.r,..." ((id, coverage)
+/// pairs: the object id guide). Empty when the file has none. Recognised
+/// names: <prefix>CryptoObjectNN.{r,g,b,a} (Blender) and
+/// crypto_objectNN.{R,G,B,A} (Arnold), in either letter case.
+std::string
+cryptomatte_object_selection(const std::vector<std::string>& names);
+
+/// Is this channel part of a Cryptomatte layer (ids stored as float bit
+/// patterns, so always written as float)? True for the channels of a layer
+/// named by a `cryptomatte/<hash>/name` attribute (`layer_names`), and for
+/// any channel whose layer's last part begins with "crypto".
+bool
+is_cryptomatte_channel(const std::string& channel,
+                       const std::vector<std::string>& layer_names);
+
+}  // namespace job
+}  // namespace zdenoise
