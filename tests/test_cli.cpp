@@ -196,6 +196,7 @@ TEST_F(CliTest, VersionAndHelp)
     r = run("--help");
     EXPECT_EQ(r.status, 0);
     for (const char* opt : { "--in", "--albedo", "--normal", "--depth", "--id", "--variance",
-                             "--halves", "--threads", "--eta", "--rmax", ":ch=" })
+                             "--halves", "--threads", "--eta", "--rmax", ":ch=", "--mode",
+                             "--layer", "--residual", "--aovs", "-d TYPE" })
         EXPECT_NE(r.out.find(opt), std::string::npos) << "help lacks " << opt;
 }

@@ -460,6 +460,7 @@ TEST_F(LayersCli, CryptomatteRanksAreTheObjectIdGuide)
 
     RunResult res = run("--in " + path("crypto.exr") + " -o " + path("out.exr") + " -v");
     ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_NE(res.out.find("mode beauty"), std::string::npos) << "beauty is the default";
     EXPECT_NE(res.out.find("channels ViewLayer.CryptoObject00.r,ViewLayer.CryptoObject00.g,"
                            "ViewLayer.CryptoObject00.b,ViewLayer.CryptoObject00.a"),
               std::string::npos)

@@ -517,7 +517,13 @@ run(Job j, JobResult& result)
                   "describe the beauty, not a layer)"
                 : "  noise     estimated per layer");
     } else {
-        result.log.push_back("mode beauty");
+        std::string found;
+        for (const LayerArg& a : layer_args)
+            found += (found.empty() ? "" : ", ") + a.name;
+        result.log.push_back(found.empty()
+                                 ? "mode beauty"
+                                 : "mode beauty (layers found: " + found
+                                       + "; --mode layers uses them)");
         if (!guides.variance && !guides.half_a)
             result.log.push_back("  noise     estimated from the image");
     }
