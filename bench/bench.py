@@ -226,6 +226,56 @@ def print_table(rows):
             print('  '.join('-' * w for w in wid))
 
 
+# Regions of the reference where a lobe matters, by its colour pass (mean of
+# R,G,B): where layered denoising should help.
+REGIONS = [('glossy', ['GlossCol'], 0.05), ('transmission', ['TransCol'], 0.05),
+           ('emit+env', ['Emit', 'Env'], 0.0)]
+
+
+def region_relmse(img, ref, ref_path, load_rgb):
+    """relMSE (zmetrics' formula) over the whole frame and each region."""
+    import numpy as np
+    e = np.mean((img - ref) ** 2 / (ref * ref + 1e-2), axis=2)
+    out = {'all': float(e.mean())}
+    for name, passes, threshold in REGIONS:
+        try:
+            level = sum(load_rgb(ref_path, p, None)[0].mean(axis=2) for p in passes)
+        except SystemExit:
+            continue
+        mask = level > threshold
+        out[name] = float(e[mask].mean()) if mask.any() else None
+        out[name + '_pixels'] = int(mask.sum())
+    return out
+
+
+def print_mode_table(cases, modes):
+    """relMSE of each --mode, whole frame and per region, and the change of
+    the last mode against the first."""
+    first, last = modes[0], modes[-1]
+    print(f'--mode {last} vs --mode {first}: relMSE per region (change = {last} / {first} - 1; '
+          f'regions from the reference: GlossCol or TransCol > 0.05, Emit+Env > 0)')
+    regions = ['all'] + [r[0] for r in REGIONS]
+    cells = [['scene', 'spp', 'seed'] + [f'{r} {m}' for r in regions for m in (first, last)]
+             + [f'{r} change' for r in regions]]
+    for c in cases:
+        mm = c.get('mode_metrics', {})
+        if first not in mm or last not in mm:
+            continue
+        row = [c['scene'], str(c['spp']), str(c['seed'])]
+        for r in regions:
+            for m in (first, last):
+                row.append(fmt(mm[m].get(r), '.4g'))
+        for r in regions:
+            a, b = mm[first].get(r), mm[last].get(r)
+            row.append(f'{100.0 * (b / a - 1.0):+.1f}%' if a and b is not None else '-')
+        cells.append(row)
+    wid = [max(len(c[i]) for c in cells) for i in range(len(cells[0]))]
+    for n, c in enumerate(cells):
+        print('  '.join(v.ljust(wid[i]) if i == 0 else v.rjust(wid[i]) for i, v in enumerate(c)).rstrip())
+        if n == 0:
+            print('  '.join('-' * w for w in wid))
+
+
 def parse_list(s, conv):
     return [conv(v) for v in s.replace(',', ' ').split()]
 
@@ -250,6 +300,9 @@ def main(argv=None):
     ap.add_argument('--baseline-sigma', type=float, default=BASELINE_SIGMA,
                     help=f'baseline Gaussian sigma (default {BASELINE_SIGMA}, see comment in the script)')
     ap.add_argument('--timeout', type=float, default=900.0, help='per zdenoise run, seconds (default 900)')
+    ap.add_argument('--modes', default='',
+                    help='comma list of zdenoise --mode values (beauty,layers) to run as extra rows, '
+                         'with a region table (glossy / transmission / emitter+environment pixels)')
     ap.add_argument('--_baseline-worker', dest='worker', nargs=2, metavar=('IN', 'OUT'), help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
 
@@ -271,6 +324,10 @@ def main(argv=None):
         extra = shlex.split(a.args)
     except ValueError as e:
         die(f'bad --args: {e}')
+    modes = parse_list(a.modes, str)
+    for m in modes:
+        if m not in ('beauty', 'layers'):
+            die(f"bad --modes value '{m}' (known: beauty, layers)")
     data = os.path.join(a.shared, 'data')
     zmetrics_py = os.path.join(a.shared, 'tools', 'zmetrics.py')
     if not os.path.isdir(data):
@@ -343,6 +400,24 @@ def main(argv=None):
                     msg += f"; zdenoise FAILED ({c['z_error']})"
                 else:
                     msg += f"; zdenoise {r['wall_s']:.3f} s {r['peak_mib']:.0f} MiB"
+                # the same call with an explicit --mode, for each of --modes
+                c['mode_runs'] = {}
+                for m in modes:
+                    out = os.path.join(work, f'{tag}_zdenoise_{m}.exr')
+                    if os.path.exists(out):
+                        os.remove(out)
+                    cmd = [zbin, '--in', c['noisy'], '-o', out] + extra + ['--mode', m]
+                    r = run_measured(cmd, os.path.join(work, f'{tag}_zdenoise_{m}.stdout'),
+                                     os.path.join(work, f'{tag}_zdenoise_{m}.stderr'), a.timeout)
+                    mr = {'out': out, 'cmd': cmd, 'run': r}
+                    if r['rc'] != 0 or not os.path.isfile(out):
+                        why = ('timeout' if r['timed_out'] else r.get('error') or f"rc={r['rc']}")
+                        mr['error'] = f"{why}: {tail(os.path.join(work, f'{tag}_zdenoise_{m}.stderr'))}"
+                        failed_runs.append(f'{tag} --mode {m}')
+                        msg += f"; --mode {m} FAILED ({mr['error']})"
+                    else:
+                        msg += f"; --mode {m} {r['wall_s']:.3f} s"
+                    c['mode_runs'][m] = mr
             log(msg)
 
         perf = None
@@ -416,6 +491,19 @@ def main(argv=None):
                     if why:
                         failures.append(f"{tag} ({'; '.join(why)})")
             rows.append(zrow)
+            c['mode_metrics'] = {}
+            for m, mr in c.get('mode_runs', {}).items():
+                mrow = {**key, 'method': f'zdenoise --mode {m}', 'wall_s': mr['run']['wall_s'],
+                        'peak_mib': mr['run']['peak_mib'], 'cmd': mr['cmd'], 'rc': mr['run']['rc']}
+                if 'error' in mr:
+                    mrow['error'] = mr['error']
+                else:
+                    img = load_rgb(mr['out'], None, None)[0]
+                    mrow.update(metrics(img, ref))
+                    mrow['ratio'] = mrow['relMSE'] / base_m['relMSE'] if base_m['relMSE'] > 0 else float('inf')
+                    c['mode_metrics'][m] = region_relmse(img, ref, c['ref'], load_rgb)
+                    mrow['regions'] = c['mode_metrics'][m]
+                rows.append(mrow)
 
         if perf:
             for m in ('zdenoise', 'oiiotool'):
@@ -431,6 +519,9 @@ def main(argv=None):
         # ---------------- report ----------------
         print_table(rows)
         print()
+        if len(modes) > 1:
+            print_mode_table(cases, modes)
+            print()
         print(f'rss floor: {rss_floor:.1f} MiB (peak MiB of a child cannot read below this; see script docstring)')
         print(f'baseline: demodulate by noisy Denoising Albedo, 5x5 Gaussian sigma {a.baseline_sigma:g} '
               f'(border-renormalised), remodulate; wall s = read + filter inside the worker, '
@@ -464,7 +555,7 @@ def main(argv=None):
         if a.json:
             out = {'config': {'zdenoise': None if a.baseline_only else zbin, 'args': extra, 'shared': a.shared,
                               'scenes': scenes, 'spp': spps, 'seeds': seeds, 'baseline_sigma': a.baseline_sigma,
-                              'baseline_only': a.baseline_only, 'keep': a.keep},
+                              'baseline_only': a.baseline_only, 'keep': a.keep, 'modes': modes},
                    'rss_floor_mib': rss_floor, 'rows': rows, 'perf': perf, 'perf_note': perf_note,
                    'quality_floor': qf}
             with open(a.json, 'w') as f:
