@@ -11,6 +11,7 @@
 // prefix before ':' is the name of another format, which is why zdenoise's
 // own metadata is "zdenoise.version" and "zdenoise.parameters" (a dot).
 
+#include <algorithm>
 #include <cstring>
 #include <map>
 #include <string>
@@ -146,13 +147,19 @@ ZdnInput::open_recipe(const std::string& name, ImageSpec& newspec)
     }
 
     // The spec of the file zdenoise would write: run_job's image with the
-    // pixel types it is written in (those of the noisy input file), as
-    // scanlines.
+    // pixel types it is written in, as scanlines. As OIIO's readers do,
+    // `format` is the widest channel type, and per-channel types are listed
+    // only when they differ.
     const ImageBuf& image  = result.image;
-    const ImageSpec& input = image.nativespec();
     ImageSpec spec         = image.spec();
-    spec.format            = input.format;
-    spec.channelformats    = input.channelformats;
+    const auto& formats    = result.channel_formats;
+    spec.format            = *std::max_element(
+        formats.begin(), formats.end(),
+        [](TypeDesc a, TypeDesc b) { return a.size() < b.size(); });
+    spec.channelformats = formats;
+    if (std::all_of(formats.begin(), formats.end(),
+                    [&](TypeDesc t) { return t == spec.format; }))
+        spec.channelformats.clear();
     spec.tile_width = spec.tile_height = spec.tile_depth = 0;
 
     // Convert each channel once to its pixel type, interleaved as OIIO's

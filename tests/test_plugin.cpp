@@ -406,3 +406,33 @@ TEST_F(PluginTest, WriteRecipeRoundTrip)
     EXPECT_NE(r.err.find("itself a recipe"), std::string::npos) << r.err;
     EXPECT_FALSE(Filesystem::exists(path("again.zdn")));
 }
+
+
+TEST_F(PluginTest, LayerOptionsRoundTripThroughRecipes)
+{
+    Filesystem::create_directory(path("renders"));
+    ASSERT_TRUE(Filesystem::copy(kSample, path("renders/shot.exr")));
+    const std::string flags
+        = "--in " + quoted(path("renders/shot.exr"))
+          + " --mode layers --aovs -d float"
+            " --layer 'diff=ViewLayer.DiffDir+ViewLayer.DiffInd:ViewLayer.DiffCol:divided'"
+            " --residual ViewLayer.Emit+ViewLayer.Env";
+    RunResult r = zdenoise(flags + " --write-recipe " + quoted(path("shot.zdn")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    const std::string recipe = slurp(path("shot.zdn"));
+    for (const char* key :
+         { "\"mode\": \"layers\"", "\"aovs\": true", "\"data-type\": \"float\"",
+           "\"diff=ViewLayer.DiffDir+ViewLayer.DiffInd:ViewLayer.DiffCol:divided\"",
+           "\"residual\": \"ViewLayer.Emit+ViewLayer.Env\"" })
+        EXPECT_NE(recipe.find(key), std::string::npos) << "recipe lacks " << key << ":\n"
+                                                       << recipe;
+
+    r = zdenoise(flags + " -o " + quoted(path("cli.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = oiiotool(quoted(path("shot.zdn")) + " -o " + quoted(path("plugin.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    expect_identical(path("cli.exr"), path("plugin.exr"));
+    auto plugin = ImageInput::open(path("plugin.exr"));
+    ASSERT_TRUE(plugin);
+    EXPECT_GE(plugin->spec().channelindex("diff.G"), 0) << "--aovs came through the recipe";
+}

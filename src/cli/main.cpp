@@ -64,7 +64,7 @@ Inputs (each FILE may take a channel selection, oiiotool style:
 
 Layers (docs/LAYERS.md):
   --mode MODE          'layers': denoise each layer (lobe or specular depth)
-                       with its own albedo, add the residual unfiltered;
+                       with its own albedo, add the residual;
                        'beauty': denoise the beauty with the albedo. Default:
                        layers when --layer is given, else beauty (the better
                        on the public benchmark; docs/LAYERS.md).
@@ -191,29 +191,6 @@ parse_int(const std::string& opt, const std::string& value)
     return v;
 }
 
-/// NAME=RADIANCE:ALBEDO[:divided]
-job::LayerArg
-parse_layer(const std::string& value)
-{
-    job::LayerArg layer;
-    const size_t eq = value.find('=');
-    std::vector<std::string> parts;
-    if (eq != std::string::npos)
-        parts = Strutil::splits(value.substr(eq + 1), ":");
-    if (eq == std::string::npos || eq == 0 || parts.size() < 2
-        || parts.size() > 3 || parts[0].empty() || parts[1].empty()
-        || (parts.size() == 3 && parts[2] != "divided"))
-        fail(format("--layer needs NAME=RADIANCE:ALBEDO[:divided], got '{}'",
-                    value),
-             kExitUsage);
-    layer.name     = value.substr(0, eq);
-    layer.radiance = parts[0];
-    layer.albedo   = parts[1];
-    layer.divided  = parts.size() == 3;
-    return layer;
-}
-
-
 Args
 parse_args(int argc, char* argv[])
 {
@@ -312,28 +289,29 @@ parse_args(int argc, char* argv[])
             *ints[opt] = parse_int(opt, value(opt));
         } else if (opt == "--mode") {
             const std::string mode = value(opt);
-            if (mode == "layers")
-                a.job.mode = job::Mode::Layers;
-            else if (mode == "beauty")
-                a.job.mode = job::Mode::Beauty;
-            else
+            if (!job::parse_mode(mode, a.job.mode))
                 fail(format("--mode: unknown mode '{}' (known: layers, "
                             "beauty)",
                             mode),
                      kExitUsage);
         } else if (opt == "--layer") {
-            a.job.layers.push_back(parse_layer(value(opt)));
+            const std::string text = value(opt);
+            a.job.layers.emplace_back();
+            if (!job::parse_layer(text, a.job.layers.back()))
+                fail(format("--layer needs NAME=RADIANCE:ALBEDO[:divided], "
+                            "got '{}'",
+                            text),
+                     kExitUsage);
         } else if (opt == "--residual") {
             a.job.residual = value(opt);
         } else if (opt == "--aovs") {
             a.job.write_layers = true;
         } else if (opt == "-d") {
             const std::string type = value(opt);
-            if (type != "half" && type != "float")
+            if (!job::parse_data_type(type, a.job.data_type))
                 fail(format("-d: unknown type '{}' (known: half, float)",
                             type),
                      kExitUsage);
-            a.job.data_type = TypeDesc(type);
         } else if (opt == "--no-normal") {
             a.job.no_normal = true;
         } else if (opt == "--no-depth") {

@@ -372,7 +372,8 @@ put_channels(ImageBuf& out, std::vector<TypeDesc>& formats,
 
 /// Each output channel's pixel type: the input's, or `data_type`;
 /// Cryptomatte channels always float (their ids are float bit patterns).
-void
+/// Set for writing, and returned.
+std::vector<TypeDesc>
 set_write_formats(ImageBuf& out, std::vector<TypeDesc> formats,
                   TypeDesc data_type)
 {
@@ -390,6 +391,7 @@ set_write_formats(ImageBuf& out, std::vector<TypeDesc> formats,
             formats[c] = TypeFloat;
     }
     out.set_write_format(formats);
+    return formats;
 }
 
 
@@ -571,7 +573,7 @@ run(Job j, JobResult& result)
                 "  layer {} written as {}.R,G,B (mean radius {:.2f})", n, n,
                 st.mean_radius));
         }
-    set_write_formats(out, formats, j.data_type);
+    result.channel_formats = set_write_formats(out, formats, j.data_type);
     if (managed)
         colour::tag_colour_space(out.specmod(), spaces.output, spaces.input);
     out.specmod().attribute("zdenoise.version", ZDENOISE_VERSION_STRING);
@@ -592,6 +594,63 @@ one_line(std::string s)
         if (c == '\n' || c == '\r')
             c = ' ';
     return s;
+}
+
+
+bool
+parse_mode(const std::string& text, Mode& mode)
+{
+    if (text == "beauty")
+        mode = Mode::Beauty;
+    else if (text == "layers")
+        mode = Mode::Layers;
+    else
+        return false;
+    return true;
+}
+
+
+const char*
+mode_name(Mode mode)
+{
+    return mode == Mode::Beauty ? "beauty" : mode == Mode::Layers ? "layers" : "";
+}
+
+
+bool
+parse_data_type(const std::string& text, TypeDesc& type)
+{
+    if (text != "half" && text != "float")
+        return false;
+    type = TypeDesc(text);
+    return true;
+}
+
+
+bool
+parse_layer(const std::string& text, LayerArg& layer)
+{
+    const size_t eq = text.find('=');
+    if (eq == std::string::npos || eq == 0)
+        return false;
+    const std::vector<std::string> parts = Strutil::splits(text.substr(eq + 1),
+                                                           ":");
+    if (parts.size() < 2 || parts.size() > 3 || parts[0].empty()
+        || parts[1].empty() || (parts.size() == 3 && parts[2] != "divided"))
+        return false;
+    layer.name     = text.substr(0, eq);
+    layer.radiance = parts[0];
+    layer.albedo   = parts[1];
+    layer.divided  = parts.size() == 3;
+    return true;
+}
+
+
+std::string
+layer_text(const LayerArg& layer)
+{
+    return layer.name + "=" + layer.radiance + ":" + layer.albedo
+           + (layer.divided ? ":divided" : "");
 }
 
 

@@ -59,14 +59,32 @@ struct Job {
 };
 
 struct JobResult {
-    /// The output image, with per-channel write formats of the input and
-    /// the zdenoise metadata set: ready for ImageBuf::write.
+    /// The output image, with its per-channel write formats and the
+    /// zdenoise metadata set: ready for ImageBuf::write.
     OIIO::ImageBuf image;
+    /// Each channel's pixel type in the output (as set for writing): the
+    /// input's, or -d's, Cryptomatte float.
+    std::vector<OIIO::TypeDesc> channel_formats;
     FilterStats stats;
     /// What was read and assumed, one line each (for -v).
     std::vector<std::string> log;
     double read_seconds = 0.0, denoise_seconds = 0.0;
 };
+
+/// The spellings of the command line and recipes: "beauty", "layers" (Auto
+/// has none); "half", "float" for the output type;
+/// "NAME=RADIANCE:ALBEDO[:divided]" for a layer. Each parse returns false
+/// for anything else.
+bool
+parse_mode(const std::string& text, Mode& mode);
+const char*
+mode_name(Mode mode);
+bool
+parse_data_type(const std::string& text, OIIO::TypeDesc& type);
+bool
+parse_layer(const std::string& text, LayerArg& layer);
+std::string
+layer_text(const LayerArg& layer);
 
 /// Run `job`. On failure returns false and a one-line `error` naming the
 /// file, channel or option at fault. Never throws.

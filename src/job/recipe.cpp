@@ -64,7 +64,15 @@ struct FlagKey {
 
 const FlagKey kFlags[] = { { "no-normal", &Job::no_normal },
                            { "no-depth", &Job::no_depth },
-                           { "no-id", &Job::no_id } };
+                           { "no-id", &Job::no_id },
+                           { "aovs", &Job::write_layers } };
+
+/// Keys whose value is one string of the command line's spelling.
+bool
+is_text_key(const std::string& key)
+{
+    return key == "mode" || key == "residual" || key == "data-type";
+}
 
 /// The colour options (ocio/colour.h), by recipe key (the option names).
 struct ColourKey {
@@ -130,7 +138,9 @@ known_keys(bool in_file_name)
         s += std::string(", ") + k.key;
     for (const ColourKey& k : kColourKeys)
         s += std::string(", ") + k.key;
-    s += ", preset";
+    if (!in_file_name)
+        s += ", layers";
+    s += ", mode, residual, data-type, preset";
     for (const FilterOptionName& o : filter_option_names())
         s += std::string(", ") + o.name;
     return s + ", threads";
@@ -255,7 +265,9 @@ apply_overrides(json& recipe,
             if (!parse_real(text, real))
                 fail(format("argument {}={} must be a number", key, text));
             recipe[key] = real;
-        } else if (key == "halves" || key == kVersionKey) {
+        } else if (is_text_key(key)) {
+            recipe[key] = text;
+        } else if (key == "halves" || key == "layers" || key == kVersionKey) {
             fail(format("argument '{}' cannot be given after the '?'; edit "
                         "the recipe",
                         key));
@@ -335,6 +347,36 @@ parse(const std::string& text, const std::string& folder,
                 && !Filesystem::path_is_absolute(text))
                 text = folder + "/" + text;
             job.colour.*(colour->value) = text;
+        } else if (key == "layers") {
+            if (!value.is_array())
+                fail(format("\"layers\" must be a list of "
+                            "\"NAME=RADIANCE:ALBEDO[:divided]\", not {}",
+                            shown(value)));
+            for (const json& layer : value) {
+                job.layers.emplace_back();
+                if (!layer.is_string()
+                    || !parse_layer(layer.get<std::string>(),
+                                    job.layers.back()))
+                    fail(format("\"layers\": each must be "
+                                "\"NAME=RADIANCE:ALBEDO[:divided]\", not {}",
+                                shown(layer)));
+            }
+        } else if (is_text_key(key)) {
+            if (!value.is_string())
+                fail(format("\"{}\" must be a string, not {}", key,
+                            shown(value)));
+            const std::string text = value.get<std::string>();
+            if (key == "residual")
+                job.residual = text;
+            else if (key == "mode" && !parse_mode(text, job.mode))
+                fail(format("\"mode\" must be \"beauty\" or \"layers\", not "
+                            "{}",
+                            shown(value)));
+            else if (key == "data-type"
+                     && !parse_data_type(text, job.data_type))
+                fail(format("\"data-type\" must be \"half\" or \"float\", not "
+                            "{}",
+                            shown(value)));
         } else if (key == "threads") {
             job.threads = parse_whole_number(key, value);
             if (job.threads < 0)
@@ -488,6 +530,17 @@ recipe_text(const Job& job, const std::string& preset,
         if (!text.empty())
             recipe[k.key] = k.is_path ? relative_path(text, folder) : text;
     }
+    if (job.mode != Mode::Auto)
+        recipe["mode"] = mode_name(job.mode);
+    if (!job.layers.empty()) {
+        recipe["layers"] = nlohmann::ordered_json::array();
+        for (const LayerArg& layer : job.layers)
+            recipe["layers"].push_back(layer_text(layer));
+    }
+    if (!job.residual.empty())
+        recipe["residual"] = job.residual;
+    if (job.data_type != OIIO::TypeUnknown)
+        recipe["data-type"] = job.data_type.c_str();
     recipe["preset"] = preset;
     for (const FilterOptionName& o : filter_option_names()) {
         if (o.whole) {
