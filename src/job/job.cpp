@@ -35,6 +35,23 @@ fail(const std::string& message)
 }
 
 
+/// Do two data windows cover the same pixels?
+bool
+same_pixels(const ROI& a, const ROI& b)
+{
+    return a.xbegin == b.xbegin && a.xend == b.xend && a.ybegin == b.ybegin
+           && a.yend == b.yend;
+}
+
+/// A data window as messages show it: 384x384+0+0.
+std::string
+window_text(const ROI& r)
+{
+    return format("{}x{}{:+d}{:+d}", r.width(), r.height(), r.xbegin,
+                  r.ybegin);
+}
+
+
 /// One input file: the channels of all its parts (a multipart EXR's part
 /// k > 0 contributes its channels C as PART.C unless already so named), as
 /// float, with each channel's pixel type in the file.
@@ -92,14 +109,11 @@ private:
         ImageBuf buf = read_part(path, part, formats);
         const ImageSpec& spec = buf.spec();
         const std::string name = spec.get_string_attribute("name");
-        const ROI a = file.image.roi(), b = buf.roi();
-        if (a.xbegin != b.xbegin || a.xend != b.xend || a.ybegin != b.ybegin
-            || a.yend != b.yend)
-            fail(format("'{}': part {} ('{}') is {}x{}{:+d}{:+d}, part 0 is "
-                        "{}x{}{:+d}{:+d}: zdenoise needs every part to cover "
-                        "the same pixels",
-                        path, part, name, b.width(), b.height(), b.xbegin,
-                        b.ybegin, a.width(), a.height(), a.xbegin, a.ybegin));
+        if (!same_pixels(file.image.roi(), buf.roi()))
+            fail(format("'{}': part {} ('{}') is {}, part 0 is {}: zdenoise "
+                        "needs every part to cover the same pixels",
+                        path, part, name, window_text(buf.roi()),
+                        window_text(file.image.roi())));
         std::vector<std::string> names = file.image.spec().channelnames;
         for (const std::string& c : spec.channelnames)
             names.push_back(name.empty() || Strutil::starts_with(c, name + ".")
@@ -149,13 +163,11 @@ load_role(InputFiles& files, const InputArg& arg, Role role,
         fail(format("{} '{}': {}", role_name(role), arg.path, err));
     const ROI a = src.roi();
     const ROI b = reference ? reference->roi() : a;
-    if (a.xbegin != b.xbegin || a.xend != b.xend || a.ybegin != b.ybegin
-        || a.yend != b.yend)
-        fail(format("{} '{}' is {}x{}{:+d}{:+d}, but the noisy input '{}' is "
-                    "{}x{}{:+d}{:+d}: they must cover the same pixels",
-                    role_name(role), arg.path, a.width(), a.height(),
-                    a.xbegin, a.ybegin, reference_path, b.width(), b.height(),
-                    b.xbegin, b.ybegin));
+    if (!same_pixels(a, b))
+        fail(format("{} '{}' is {}, but the noisy input '{}' is {}: they must "
+                    "cover the same pixels",
+                    role_name(role), arg.path, window_text(a), reference_path,
+                    window_text(b)));
     std::vector<std::string> names;
     if (role == Role::Radiance || role == Role::LayerRadiance)
         names = { "R", "G", "B", "A" };
