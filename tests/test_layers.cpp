@@ -307,6 +307,8 @@ TEST_F(LayersCli, CyclesLobesAreFoundAndTheirAovsAddUpToTheBeauty)
         EXPECT_NE(res.out.find(needle), std::string::npos) << "-v lacks '" << needle << "':\n"
                                                            << res.out;
     EXPECT_EQ(res.out.find("ViewLayer.Trans"), std::string::npos) << "no Trans passes were written";
+    EXPECT_NE(res.out.find("mode layers: 3 layer(s)"), std::string::npos)
+        << "Diff, Gloss and the residual:\n" << res.out;
 
     ImageBuf out(path("out.exr"));
     ASSERT_TRUE(out.read(0, 0, true, TypeFloat)) << out.geterror();

@@ -513,9 +513,7 @@ run(Job j, JobResult& result)
     LoadedLayers loaded;
     std::vector<Layer> layers;
     if (layered) {
-        result.log.push_back(format("mode layers: {} layer(s){}",
-                                    layer_args.size(),
-                                    j.layers.empty() ? "" : " (--layer)"));
+        const size_t mode_line = result.log.size();
         // An explicit residual (--residual) or explicit layers (--layer)
         // are the user's decomposition: the residual is then not filtered.
         const bool own = !j.residual.empty() || !j.layers.empty();
@@ -525,6 +523,9 @@ run(Job j, JobResult& result)
                              own ? std::string() : conv.residual_albedo,
                              conv.residual_layer, noisy, radiance.image,
                              loaded, result.log);
+        result.log.insert(result.log.begin() + long(mode_line),
+                          format("mode layers: {} layer(s){}", layers.size(),
+                                 j.layers.empty() ? "" : " (--layer)"));
         result.log.push_back(
             guides.variance || guides.half_a
                 ? "  noise     estimated per layer (--variance and --halves "
