@@ -174,7 +174,8 @@ decode_filter_inputs(FilterInputs& in, ImageBuf& dst, const ImageBuf& quotient,
                 const bool demod = albedo_demodulated(alb[3 * i + c], eps_a);
                 if (surface && demod)
                     cls |= uint8_t(kReceiveR << c);
-                all_fit = all_fit && demod && finite;
+                all_fit = all_fit && demod
+                          && std::fabs(in.z[3 * i + c]) <= kLargestFitQuotient;
             }
             if (all_fit) {
                 cls |= kFitPoint;

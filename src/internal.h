@@ -20,12 +20,20 @@ constexpr float kLumaWeights[3] = { 0.2126f, 0.7152f, 0.0722f };
 
 /// Is an albedo channel value demodulated (docs/FILTER.md section 1)?
 /// The single definition used by demodulate, the filter and remodulate, so
-/// that the three agree pixel for pixel.
+/// that the three agree pixel for pixel. An albedo above 1/albedo_eps is
+/// no reflectance but a broken pass: remodulating by it would turn the
+/// neighbours' filtered value into a firefly of that size.
 inline bool
 albedo_demodulated(float albedo, float albedo_eps)
 {
-    return std::isfinite(albedo) && albedo >= albedo_eps;
+    return std::isfinite(albedo) && albedo >= albedo_eps
+           && albedo * albedo_eps <= 1.0f;
 }
+
+/// Largest quotient magnitude taking part in fits (docs/FILTER.md section
+/// 2): the filter squares values in float, and a larger one (overflowed
+/// shading, not light) would swamp every window around it.
+constexpr float kLargestFitQuotient = 1e18f;
 
 /// Check that `img` is a usable input of operation `opname`: initialized,
 /// not deep, 2D, at least `minchannels` channels, and its data window holds

@@ -62,7 +62,7 @@ bool
 demod_channel(const RefImage& La, int x, int y, int c, float albedo_eps)
 {
     float a = La.at(x, y, c);
-    return std::isfinite(a) && a >= albedo_eps;
+    return std::isfinite(a) && a >= albedo_eps && a * albedo_eps <= 1.0f;
 }
 
 }  // namespace
@@ -625,7 +625,7 @@ Filter::run(RefStats* stats)
                 bool fin                     = std::isfinite(z.at(x, y, c));
                 if (!fin)
                     nonfinite = true;
-                if (!d || !fin)
+                if (!d || !(std::fabs(z.at(x, y, c)) <= 1e18f))
                     fp = false;
             }
             fitpt_[idx(x, y)] = fp;

@@ -65,9 +65,9 @@ struct FilterOptions {
     /// Points whose relative noise sigma exceeds this take no part in fits
     /// (they still receive the filtered value).
     float sigma_good = 3.0f;
-    /// Albedo channels below this (or non-finite) are not demodulated: the
-    /// radiance passes through unchanged there. Also the epsilon of the
-    /// demodulation L / (La + albedo_eps).
+    /// Albedo channels below this, above its inverse, or non-finite are not
+    /// demodulated: the radiance passes through unchanged there. Also the
+    /// epsilon of the demodulation L / (La + albedo_eps).
     float albedo_eps = 1e-3f;
     /// Depth guide: a neighbour whose inverse depth departs from the plane
     /// extrapolated from the centre by more than this fraction is on another
@@ -138,8 +138,8 @@ struct FilterStats {
 
 
 /// Demodulation z = L / (La + eps) per RGB channel. Channels whose albedo is
-/// below `albedo_eps` or non-finite keep the radiance unchanged, so that
-/// remodulate() inverts this exactly.
+/// below `albedo_eps`, above 1 / `albedo_eps`, or non-finite keep the
+/// radiance unchanged, so that remodulate() inverts this exactly.
 ///
 /// @param dst       Result (float when allocated here).
 /// @param radiance  Noisy radiance L; channels 0-2 are RGB, any others are
