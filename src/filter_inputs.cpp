@@ -356,7 +356,10 @@ GuideWeight::operator()(int x, int y) const
         if (z != z0)
             return 0.0f;
         if (!z) {
-            const float d = n[0] * n0[0] + n[1] * n0[1] + n[2] * n0[2];
+            // Unit vectors, but rounding can put d a hair above 1, which
+            // a large normal_power turns into Inf (and the weights NaN).
+            const float d = std::min(
+                1.0f, n[0] * n0[0] + n[1] * n0[1] + n[2] * n0[2]);
             if (!(d > m_cut))
                 return 0.0f;
             if (m_power == 4.0f) {

@@ -175,7 +175,7 @@ private:
             return 1.0;
         if (a.none || b.none)
             return 0.0;
-        double d = dot(a, b);
+        double d = std::min(1.0, dot(a, b));  // rounding can exceed 1
         return d > opt.normal_cut ? std::pow(d, double(opt.normal_power)) : 0.0;
     }
 
