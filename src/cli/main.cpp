@@ -380,8 +380,9 @@ run(int argc, char* argv[])
 
     int last_tenth = -1;
     if (a.verbose) {
-        const bool tty        = isatty(fileno(stderr));
-        a.job.filter.progress = [&](float f) {
+        const bool tty = isatty(fileno(stderr));
+        // tty by value: the callback runs after this block has ended.
+        a.job.filter.progress = [&last_tenth, tty](float f) {
             int tenth = int(f * 10.0f);
             if (tenth != last_tenth) {
                 last_tenth = tenth;
