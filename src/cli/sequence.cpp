@@ -208,18 +208,7 @@ write_report(const std::string& path, const job::Job& job,
                           { "failed", failed },
                           { "seconds", seconds } };
     const std::string text = report.dump(2) + "\n";
-    return job::write_atomically(
-        path,
-        [&](const std::string& tmp, std::string& why) {
-            std::ofstream file(tmp, std::ios::binary);
-            file << text;
-            file.close();
-            if (file)
-                return true;
-            why = std::strerror(errno);
-            return false;
-        },
-        error);
+    return job::write_text_atomically(path, text, error);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 
 #include <unistd.h>
 
@@ -58,6 +59,25 @@ write_atomically(const OIIO::ImageBuf& image, const std::string& path,
             if (image.write(tmp))
                 return true;
             why = image.geterror();
+            return false;
+        },
+        error);
+}
+
+
+bool
+write_text_atomically(const std::string& path, const std::string& text,
+                      std::string& error)
+{
+    return write_atomically(
+        path,
+        [&](const std::string& tmp, std::string& why) {
+            std::ofstream file(tmp, std::ios::binary);
+            file << text;
+            file.close();
+            if (file)
+                return true;
+            why = std::strerror(errno);
             return false;
         },
         error);

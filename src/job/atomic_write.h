@@ -28,5 +28,10 @@ write_atomically(const std::string& path,
                                           std::string& why)>& write,
                  std::string& error);
 
+/// Write the text file `path` the same way.
+bool
+write_text_atomically(const std::string& path, const std::string& text,
+                      std::string& error);
+
 }  // namespace job
 }  // namespace zdenoise

@@ -570,18 +570,7 @@ write_recipe(const Job& job, const std::string& preset,
         error = format("cannot write recipe '{}': {}", path, e.what());
         return false;
     }
-    return write_atomically(
-        path,
-        [&](const std::string& tmp, std::string& why) {
-            std::ofstream file(tmp, std::ios::binary);
-            file << text;
-            file.close();
-            if (file)
-                return true;
-            why = std::strerror(errno);
-            return false;
-        },
-        error);
+    return write_text_atomically(path, text, error);
 }
 
 }  // namespace job
