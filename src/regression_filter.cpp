@@ -198,6 +198,8 @@ private:
     /// Add the good points of row y, columns [xa, xb], to `m`.
     void accumulate(FitMoments& m, int R, int y, int xa, int xb, float mean,
                     double& w2s2) const;
+    // noinline: the three stages stay separate in profiles
+    // (docs/PERFORMANCE.md); a call per window or radius costs nothing.
     /// Extend the cached guide weights and point sums to radius R.
     [[gnu::noinline]] void grow_to(int R);
     [[gnu::noinline]] WindowFit fit(int R);
