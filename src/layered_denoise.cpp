@@ -70,11 +70,14 @@ clamp_negative(ImageBuf& img, ROI roi, int nthreads)
 /// to be done).
 bool
 denoise_layer(ImageBuf& dst, const Layer& layer, const Guides& shared,
-              const FilterOptions& options, FilterStats* stats, ROI roi,
+              const FilterOptions& shared_options, FilterStats* stats, ROI roi,
               int nthreads, ImageBuf& out, const ImageBuf*& contribution)
 {
     const Guides guides = layer_guides(shared, layer.guides);
-    contribution        = &out;
+    FilterOptions options = shared_options;
+    if (layer.reflected)
+        options.edge_k *= kReflectedEdgeScale;
+    contribution = &out;
     bool ok             = true;
     if (!layer.divided) {
         if (!layer.filter) {

@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <OpenImageIO/imageio.h>
@@ -226,6 +227,35 @@ TEST(LayeredDenoise, EachLayerIsDenoisedOnItsOwn)
 }
 
 
+TEST(LayeredDenoise, AReflectedLayerKeepsEdgesItsGuidesDoNotShow)
+{
+    // A glossy layer reflecting a hard light/shadow boundary on a flat,
+    // uniformly coloured surface: the guides (one plane, one object) say
+    // nothing of the edge, so only the edge test can keep it.
+    LobeRender r;
+    const ImageBuf clean_gloss_z = cycles_divide(r.glossy.clean, r.glossy.albedo);
+    const ImageBuf clean_gloss   = product(r.gloss_col, clean_gloss_z);
+    const int ex                 = r.glossy.edge_x;
+    auto edge_error = [&](bool reflected) {
+        std::vector<zdenoise::Layer> layers = r.layers(true);
+        ImageBuf gloss_out;
+        layers[1].reflected = reflected;
+        layers[1].denoised  = &gloss_out;
+        const zdenoise::Guides guides = { &r.glossy.normal, &r.glossy.depth };
+        ImageBuf out = zdenoise::layered_denoise(layers, nullptr, guides);
+        EXPECT_FALSE(out.has_error()) << out.geterror();
+        return std::make_pair(synth::rel_mse(gloss_out, clean_gloss, ex - 3, ex + 3, 0, H),
+                              synth::rel_mse(gloss_out, clean_gloss));
+    };
+    const auto plain = edge_error(false), reflected = edge_error(true);
+    // Measured: edge relMSE noisy 0.058, plain 0.047, reflected 0.017.
+    EXPECT_LT(reflected.first * 1.5, plain.first)
+        << "the stricter edge test of a reflected layer must keep the reflected edge";
+    EXPECT_LT(reflected.second * 3.0, synth::rel_mse(product(r.gloss_col, r.gloss_z), clean_gloss))
+        << "and still remove the layer's noise";
+}
+
+
 TEST(LayeredDenoise, ErrorsNameTheLayer)
 {
     LobeRender r;
@@ -247,7 +277,8 @@ TEST(LayeredDenoise, ErrorsNameTheLayer)
 class LayersCli : public CliTest {
 protected:
     /// The LobeRender as a Blender Cycles multilayer EXR.
-    std::string write_cycles(const LobeRender& r, const std::string& name)
+    std::string write_cycles(const LobeRender& r, const std::string& name,
+                             const ImageBuf* env = nullptr)
     {
         const std::string P = "ViewLayer.";
         ImageBuf alpha = constant(1.0f, 1), zero = constant(0.0f);
@@ -263,7 +294,7 @@ protected:
         add_rgb(ch, P + "GlossDir", r.gloss_z);
         add_rgb(ch, P + "GlossInd", zero);
         add_rgb(ch, P + "Emit", r.emit);
-        add_rgb(ch, P + "Env", zero);
+        add_rgb(ch, P + "Env", env ? *env : zero);
         ImageBuf img = assemble(ch);
         EXPECT_TRUE(img.write(path(name))) << img.geterror();
         return path(name);
@@ -302,8 +333,11 @@ TEST_F(LayersCli, CyclesLobesAreFoundAndTheirAovsAddUpToTheBeauty)
     ASSERT_EQ(res.status, 0) << res.err;
     for (const char* needle : { "Blender Cycles", "layer     ViewLayer.Diff: ViewLayer.DiffDir",
                                 "ViewLayer.DiffInd", "albedo ViewLayer.DiffCol", "(divided by it)",
-                                "layer     ViewLayer.Gloss", "ViewLayer.Residual: the beauty minus "
-                                "the layers with albedo ViewLayer.Denoising Albedo" })
+                                "layer     ViewLayer.Gloss",
+                                "ViewLayer.GlossCol.B (divided by it) (reflected: stricter edge test)",
+                                "residual  ViewLayer.Env.R,ViewLayer.Env.G,ViewLayer.Env.B, not filtered",
+                                "ViewLayer.Residual: the beauty minus the layers minus ViewLayer.Env.R,"
+                                "ViewLayer.Env.G,ViewLayer.Env.B with albedo ViewLayer.Denoising Albedo" })
         EXPECT_NE(res.out.find(needle), std::string::npos) << "-v lacks '" << needle << "':\n"
                                                            << res.out;
     EXPECT_EQ(res.out.find("ViewLayer.Trans"), std::string::npos) << "no Trans passes were written";
@@ -327,6 +361,44 @@ TEST_F(LayersCli, CyclesLobesAreFoundAndTheirAovsAddUpToTheBeauty)
     ImageBuf beauty;
     ImageBufAlgo::channels(beauty, out, 3, { combined, combined + 1, combined + 2 });
     EXPECT_LT(synth::rel_mse(beauty, r.clean) * 3.0, synth::rel_mse(r.beauty, r.clean));
+}
+
+
+TEST_F(LayersCli, CyclesEnvironmentIsAddedAsItIs)
+{
+    // The environment seen directly: a sharp, bright checker in the
+    // beauty's Env pass (and, as Cycles does, in Denoising Albedo).
+    LobeRender r;
+    ImageBuf env = constant(0.0f);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x)
+            if (y < 8 && ((x / 2 + y / 2) % 2)) {
+                const float e[3] = { 2.0f, 2.5f, 3.0f };
+                env.setpixel(x, y, e, 3);
+            }
+    r.beauty           = ImageBufAlgo::add(r.beauty, env);
+    r.denoising_albedo = ImageBufAlgo::add(r.denoising_albedo, env);
+    const std::string in = write_cycles(r, "cycles_env.exr", &env);
+    RunResult res = run("--in " + in + " -o " + path("out.exr") + " --mode layers --aovs -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_NE(res.out.find("residual  ViewLayer.Env.R,ViewLayer.Env.G,ViewLayer.Env.B, not "
+                           "filtered"),
+              std::string::npos)
+        << res.out;
+
+    ImageBuf out(path("out.exr"));
+    ASSERT_TRUE(out.read(0, 0, true, TypeFloat)) << out.geterror();
+    const ImageSpec& s = out.spec();
+    ImageBuf sum = env;
+    for (const char* layer : { "ViewLayer.Diff", "ViewLayer.Gloss", "ViewLayer.Residual" }) {
+        const int c = s.channelindex(std::string(layer) + ".R");
+        ASSERT_GE(c, 0) << "--aovs must write " << layer;
+        ImageBuf l;
+        ImageBufAlgo::channels(l, out, 3, { c, c + 1, c + 2 });
+        sum = ImageBufAlgo::add(sum, l);
+    }
+    EXPECT_LT(max_rel_diff(out, sum, s.channelindex("ViewLayer.Combined.R"), 0), 1e-5f)
+        << "the output must be the denoised layers plus the environment exactly as rendered";
 }
 
 
@@ -382,6 +454,7 @@ TEST_F(LayersCli, ArnoldStyleAovsSinglePartAndMultipart)
         ASSERT_EQ(res.status, 0) << files[f] << ": " << res.err;
         for (const char* needle : { "Arnold style", "layer     diffuse: diffuse.R",
                                     "with albedo diffuse_albedo.R", "layer     specular",
+                                    "specular_albedo.B (reflected: stricter edge test)",
                                     "residual  the beauty minus the layers, not filtered",
                                     "normal    '", "channels N.X,N.Y,N.Z", "channels Z" })
             EXPECT_NE(res.out.find(needle), std::string::npos)
@@ -418,8 +491,12 @@ TEST_F(LayersCli, SpecularDepthLayersAndExplicitLayersOverrideDetection)
 
     RunResult res = run("--in " + path("spec.exr") + " -o " + path("out.exr") + " --mode layers -v");
     ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_EQ(res.out.find("spec0_albedo.B (reflected"), std::string::npos)
+        << "spec0 (no specular event) is not reflected:\n" << res.out;
     for (const char* needle : { "specular depth layers", "layer     spec0: spec0.R",
-                                "layer     spec1: spec1.R", "residual  residual.R,residual.G,"
+                                "layer     spec1: spec1.R",
+                                "spec1_albedo.B (reflected: stricter edge test)",
+                                "residual  residual.R,residual.G,"
                                 "residual.B, not filtered" })
         EXPECT_NE(res.out.find(needle), std::string::npos) << "-v lacks '" << needle << "':\n"
                                                            << res.out;
@@ -427,10 +504,12 @@ TEST_F(LayersCli, SpecularDepthLayersAndExplicitLayersOverrideDetection)
     // --layer replaces the detected layers (and implies --mode layers);
     // --residual the residual.
     res = run("--in " + path("spec.exr") + " -o " + path("out2.exr")
-              + " --layer first=spec0:spec0_albedo --residual spec1+residual -v");
+              + " --layer first=spec0:spec0_albedo:reflected --residual spec1+residual -v");
     ASSERT_EQ(res.status, 0) << res.err;
     EXPECT_NE(res.out.find("mode layers: 1 layer(s) (--layer)"), std::string::npos) << res.out;
     EXPECT_NE(res.out.find("layer     first: spec0.R"), std::string::npos) << res.out;
+    EXPECT_NE(res.out.find("spec0_albedo.B (reflected: stricter edge test)"), std::string::npos)
+        << "--layer ...:reflected marks the layer:\n" << res.out;
     EXPECT_NE(res.out.find("residual  spec1.R,spec1.G,spec1.B + residual.R"), std::string::npos)
         << res.out;
     EXPECT_EQ(res.out.find("layer     spec1"), std::string::npos) << res.out;

@@ -416,6 +416,7 @@ TEST_F(PluginTest, LayerOptionsRoundTripThroughRecipes)
         = "--in " + quoted(path("renders/shot.exr"))
           + " --mode layers --aovs -d float"
             " --layer 'diff=ViewLayer.DiffDir+ViewLayer.DiffInd:ViewLayer.DiffCol:divided'"
+            " --layer 'gloss=ViewLayer.GlossDir:ViewLayer.GlossCol:reflected:divided'"
             " --residual ViewLayer.Emit+ViewLayer.Env";
     RunResult r = zdenoise(flags + " --write-recipe " + quoted(path("shot.zdn")));
     ASSERT_EQ(r.status, 0) << r.err;
@@ -423,6 +424,7 @@ TEST_F(PluginTest, LayerOptionsRoundTripThroughRecipes)
     for (const char* key :
          { "\"mode\": \"layers\"", "\"aovs\": true", "\"data-type\": \"float\"",
            "\"diff=ViewLayer.DiffDir+ViewLayer.DiffInd:ViewLayer.DiffCol:divided\"",
+           "\"gloss=ViewLayer.GlossDir:ViewLayer.GlossCol:divided:reflected\"",
            "\"residual\": \"ViewLayer.Emit+ViewLayer.Env\"" })
         EXPECT_NE(recipe.find(key), std::string::npos) << "recipe lacks " << key << ":\n"
                                                        << recipe;

@@ -225,6 +225,14 @@ struct Layer {
     /// false: the layer is not filtered, only composed (radiance, or
     /// albedo * quotient when `divided`).
     bool filter = true;
+    /// The layer's light reached the camera through a glossy or specular
+    /// bounce (reflection, refraction: Cycles' Gloss and Trans lobes,
+    /// Arnold's specular, transmission, coat; specular depth layers 1-5).
+    /// What it shows (the reflected scene) is not what the guides describe
+    /// (the surface seen), so only the filter's edge test protects its
+    /// detail: for such a layer the test is made stricter, edge_k times
+    /// kReflectedEdgeScale (docs/LAYERS.md).
+    bool reflected = false;
     /// Guides of this layer (e.g. the normals seen through a mirror); each
     /// member given here replaces the shared guide of the same kind.
     Guides guides;
@@ -234,6 +242,9 @@ struct Layer {
     /// If not null, receives what the filter did on this layer.
     FilterStats* stats = nullptr;
 };
+
+/// The factor on FilterOptions::edge_k for a Layer that is `reflected`.
+constexpr float kReflectedEdgeScale = 0.5f;
 
 /// Layered denoising (ALGORITHM.md section 7): every layer is denoised on
 /// its own (demodulate, regression_filter, remodulate; or, for a divided
@@ -254,7 +265,8 @@ struct Layer {
 ///                  paths beyond the layers), channels 0-2, added as it is;
 ///                  null for none.
 /// @param guides    Guides shared by the layers (Layer::guides overrides).
-/// @param options   Filter parameters, the same for every layer.
+/// @param options   Filter parameters, the same for every layer, except
+///                  edge_k on a `reflected` layer.
 /// @param stats     If not null, the statistics summed over the filtered
 ///                  layers (pixels too; mean_radius weighted by windows).
 ZDENOISE_API bool layered_denoise(ImageBuf& dst,

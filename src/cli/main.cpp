@@ -68,13 +68,15 @@ Layers (docs/LAYERS.md):
                        'beauty': denoise the beauty with the albedo. Default:
                        layers when --layer is given, else beauty (the better
                        on the public benchmark; docs/LAYERS.md).
-  --layer NAME=RADIANCE:ALBEDO[:divided]
+  --layer NAME=RADIANCE:ALBEDO[:divided][:reflected]
                        A layer of the --in file (repeatable; replaces the
                        detected layers). RADIANCE and ALBEDO are channel
                        selections as for :ch= (a layer name or a list of
                        channels); RADIANCE may sum sets with '+'
                        (DiffDir+DiffInd). 'divided': the radiance is already
                        divided by the albedo (Cycles' Dir/Ind passes).
+                       'reflected': light through a glossy or specular bounce
+                       (reflection, refraction): a stricter edge test.
   --residual CHANNELS  What is added unfiltered (e.g. Emit+Env). Default: the
                        beauty minus the layers.
   --aovs               Also write each denoised layer as NAME.R,G,B.
@@ -298,7 +300,7 @@ parse_args(int argc, char* argv[])
             const std::string text = value(opt);
             a.job.layers.emplace_back();
             if (!job::parse_layer(text, a.job.layers.back()))
-                fail(format("--layer needs NAME=RADIANCE:ALBEDO[:divided], "
+                fail(format("--layer needs NAME=RADIANCE:ALBEDO[:divided][:reflected], "
                             "got '{}'",
                             text),
                      kExitUsage);

@@ -273,7 +273,8 @@ std::vector<Layer>
 load_layers(InputFiles& files, const Job& j,
             const std::vector<LayerArg>& args, const std::string& residual,
             const std::string& residual_albedo,
-            const std::string& residual_layer, const ImageBuf& noisy,
+            const std::string& residual_layer,
+            const std::string& residual_unfiltered, const ImageBuf& noisy,
             const ImageBuf& beauty, LoadedLayers& l,
             std::vector<std::string>& log)
 {
@@ -283,11 +284,13 @@ load_layers(InputFiles& files, const Job& j,
     l.denoised.resize(n);
     l.stats.resize(n);
     std::vector<Layer> layers(n);
-    auto add_layer = [&](size_t i, const std::string& name, bool divided) {
-        layers[i].name     = name;
-        layers[i].radiance = &l.radiance[i];
-        layers[i].albedo   = &l.albedo[i];
-        layers[i].divided  = divided;
+    auto add_layer = [&](size_t i, const std::string& name, bool divided,
+                         bool reflected) {
+        layers[i].name      = name;
+        layers[i].radiance  = &l.radiance[i];
+        layers[i].albedo    = &l.albedo[i];
+        layers[i].divided   = divided;
+        layers[i].reflected = reflected;
         layers[i].denoised = &l.denoised[i];
         layers[i].stats    = &l.stats[i];
     };
@@ -298,10 +301,12 @@ load_layers(InputFiles& files, const Job& j,
                                  shown_radiance);
         l.albedo[i]   = load_sum(files, j.in.path, a.albedo, noisy,
                                  shown_albedo);
-        add_layer(i, a.name, a.divided);
-        log.push_back(format("  layer     {}: {} with albedo {}{}", a.name,
+        add_layer(i, a.name, a.divided, a.reflected);
+        log.push_back(format("  layer     {}: {} with albedo {}{}{}", a.name,
                              shown_radiance, shown_albedo,
-                             a.divided ? " (divided by it)" : ""));
+                             a.divided ? " (divided by it)" : "",
+                             a.reflected ? " (reflected: stricter edge test)"
+                                         : ""));
     }
     std::string shown_residual;
     if (!residual.empty()) {
@@ -339,7 +344,18 @@ load_layers(InputFiles& files, const Job& j,
     l.radiance[i].swap(l.residual);  // l.residual: uninitialized again
     l.albedo[i] = load_sum(files, j.in.path, residual_albedo, noisy,
                            shown_albedo);
-    add_layer(i, residual_layer, false);
+    add_layer(i, residual_layer, false, false);
+    if (!residual_unfiltered.empty()) {
+        std::string shown_unfiltered;
+        l.residual = load_sum(files, j.in.path, residual_unfiltered, noisy,
+                              shown_unfiltered);
+        if (!ImageBufAlgo::sub(l.radiance[i], l.radiance[i], l.residual,
+                               {}, j.threads))
+            fail(format("layers of '{}': {}", j.in.path,
+                        one_line(l.radiance[i].geterror())));
+        shown_residual += " minus " + shown_unfiltered;
+        log.push_back("  residual  " + shown_unfiltered + ", not filtered");
+    }
     log.push_back(format("  layer     {}: {} with albedo {}", residual_layer,
                          shown_residual, shown_albedo));
     return layers;
@@ -521,7 +537,9 @@ run(Job j, JobResult& result)
                                                         : j.residual;
         layers = load_layers(files, j, layer_args, residual,
                              own ? std::string() : conv.residual_albedo,
-                             conv.residual_layer, noisy, radiance.image,
+                             conv.residual_layer,
+                             own ? std::string() : conv.residual_unfiltered,
+                             noisy, radiance.image,
                              loaded, result.log);
         result.log.insert(result.log.begin() + long(mode_line),
                           format("mode layers: {} layer(s){}", layers.size(),
@@ -648,13 +666,20 @@ parse_layer(const std::string& text, LayerArg& layer)
         return false;
     const std::vector<std::string> parts = Strutil::splits(text.substr(eq + 1),
                                                            ":");
-    if (parts.size() < 2 || parts.size() > 3 || parts[0].empty()
-        || parts[1].empty() || (parts.size() == 3 && parts[2] != "divided"))
+    if (parts.size() < 2 || parts.size() > 4 || parts[0].empty()
+        || parts[1].empty())
         return false;
-    layer.name     = text.substr(0, eq);
-    layer.radiance = parts[0];
-    layer.albedo   = parts[1];
-    layer.divided  = parts.size() == 3;
+    layer.name      = text.substr(0, eq);
+    layer.radiance  = parts[0];
+    layer.albedo    = parts[1];
+    layer.divided   = false;
+    layer.reflected = false;
+    for (size_t k = 2; k < parts.size(); ++k) {
+        bool& flag = parts[k] == "divided" ? layer.divided : layer.reflected;
+        if ((parts[k] != "divided" && parts[k] != "reflected") || flag)
+            return false;  // unknown or repeated
+        flag = true;
+    }
     return true;
 }
 
@@ -663,7 +688,8 @@ std::string
 layer_text(const LayerArg& layer)
 {
     return layer.name + "=" + layer.radiance + ":" + layer.albedo
-           + (layer.divided ? ":divided" : "");
+           + (layer.divided ? ":divided" : "")
+           + (layer.reflected ? ":reflected" : "");
 }
 
 

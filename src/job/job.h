@@ -73,7 +73,7 @@ struct JobResult {
 
 /// The spellings of the command line and recipes: "beauty", "layers" (Auto
 /// has none); "half", "float" for the output type;
-/// "NAME=RADIANCE:ALBEDO[:divided]" for a layer. Each parse returns false
+/// "NAME=RADIANCE:ALBEDO[:divided][:reflected]" for a layer. Each parse returns false
 /// for anything else.
 bool
 parse_mode(const std::string& text, Mode& mode);

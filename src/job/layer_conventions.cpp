@@ -75,6 +75,24 @@ last_part(const std::string& layer)
 }
 
 
+/// Is an AOV layer (its last name part) light through a glossy or
+/// specular bounce: Arnold's specular, transmission and coat lobes, and the
+/// specular depth layers with at least one specular event?
+bool
+is_reflected_lobe(const std::string& name)
+{
+    static const char* const kReflected[] = { "specular", "transmission",
+                                              "coat",     "spec1",
+                                              "spec2",    "spec3",
+                                              "spec4",    "spec5" };
+    const std::string l = lower(name);
+    for (const char* r : kReflected)
+        if (l == r)
+            return true;
+    return false;
+}
+
+
 Convention
 cycles_convention(const std::vector<std::string>& names,
                   const std::string& prefix)
@@ -105,11 +123,14 @@ cycles_convention(const std::vector<std::string>& names,
             if (!p.empty())
                 lighting += (lighting.empty() ? "" : "+") + p;
         }
+        // Gloss and Trans are light through a glossy bounce.
         if (!colour.empty() && !lighting.empty())
-            c.layers.push_back({ prefix + lobe, lighting, colour, true });
+            c.layers.push_back({ prefix + lobe, lighting, colour, true,
+                                 std::string(lobe) != "Diff" });
     }
-    c.residual_albedo = c.albedo;
-    c.residual_layer  = prefix + "Residual";
+    c.residual_albedo     = c.albedo;
+    c.residual_layer      = prefix + "Residual";
+    c.residual_unfiltered = pass("Env", "RGB");
     return c;
 }
 
@@ -126,12 +147,13 @@ aov_convention(const std::vector<std::string>& names)
         const std::string x = layer.substr(0, layer.size() - 7);
         if (x.empty())
             continue;
+        const bool reflected = is_reflected_lobe(last_part(x));
         if (has_layer(names, x, "RGB"))
-            c.layers.push_back({ x, x, layer, false });
+            c.layers.push_back({ x, x, layer, false, reflected });
         else if (has_layer(names, x + "_direct", "RGB")
                  && has_layer(names, x + "_indirect", "RGB"))
-            c.layers.push_back(
-                { x, x + "_direct+" + x + "_indirect", layer, false });
+            c.layers.push_back({ x, x + "_direct+" + x + "_indirect", layer,
+                                 false, reflected });
     }
     if (c.layers.empty())
         return c;

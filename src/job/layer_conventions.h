@@ -27,6 +27,8 @@ struct LayerArg {
     std::string albedo;
     /// The radiance is already divided by the albedo (Cycles' Dir/Ind).
     bool divided = false;
+    /// Light through a glossy or specular bounce (zdenoise::Layer::reflected).
+    bool reflected = false;
 };
 
 /// What a file's channel names say, by the first convention that matches.
@@ -47,6 +49,11 @@ struct Convention {
     std::string residual_albedo;
     /// The name of that layer (for --aovs).
     std::string residual_layer;
+    /// A part of that residual which is added as it is, not filtered:
+    /// Cycles' Env. The environment seen directly has no noise but the
+    /// anti-aliasing of silhouettes, which filtering with the surfaces'
+    /// guides only blurs (docs/LAYERS.md).
+    std::string residual_unfiltered;
 };
 
 /// Recognise, in order: a Blender Cycles multilayer EXR (<prefix>Combined),

@@ -350,7 +350,7 @@ parse(const std::string& text, const std::string& folder,
         } else if (key == "layers") {
             if (!value.is_array())
                 fail(format("\"layers\" must be a list of "
-                            "\"NAME=RADIANCE:ALBEDO[:divided]\", not {}",
+                            "\"NAME=RADIANCE:ALBEDO[:divided][:reflected]\", not {}",
                             shown(value)));
             for (const json& layer : value) {
                 job.layers.emplace_back();
@@ -358,7 +358,7 @@ parse(const std::string& text, const std::string& folder,
                     || !parse_layer(layer.get<std::string>(),
                                     job.layers.back()))
                     fail(format("\"layers\": each must be "
-                                "\"NAME=RADIANCE:ALBEDO[:divided]\", not {}",
+                                "\"NAME=RADIANCE:ALBEDO[:divided][:reflected]\", not {}",
                                 shown(layer)));
             }
         } else if (is_text_key(key)) {
