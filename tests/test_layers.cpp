@@ -378,6 +378,10 @@ TEST_F(LayersCli, CyclesEnvironmentIsAddedAsItIs)
             }
     r.beauty           = ImageBufAlgo::add(r.beauty, env);
     r.denoising_albedo = ImageBufAlgo::add(r.denoising_albedo, env);
+    // No emitter: the residual layer is empty but for rounding.
+    r.beauty           = ImageBufAlgo::sub(r.beauty, r.emit);
+    r.denoising_albedo = ImageBufAlgo::sub(r.denoising_albedo, r.emit);
+    r.emit             = constant(0.0f);
     const std::string in = write_cycles(r, "cycles_env.exr", &env);
     RunResult res = run("--in " + in + " -o " + path("out.exr") + " --mode layers --aovs -v");
     ASSERT_EQ(res.status, 0) << res.err;
@@ -385,6 +389,8 @@ TEST_F(LayersCli, CyclesEnvironmentIsAddedAsItIs)
                            "filtered"),
               std::string::npos)
         << res.out;
+    EXPECT_NE(res.out.find("ViewLayer.Residual.R,G,B (mean radius 0.00)"), std::string::npos)
+        << "no window is spent on a residual that holds only rounding:\n" << res.out;
 
     ImageBuf out(path("out.exr"));
     ASSERT_TRUE(out.read(0, 0, true, TypeFloat)) << out.geterror();
