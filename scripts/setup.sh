@@ -4,7 +4,7 @@
 set -euo pipefail
 packages=(g++ cmake make pkg-config libopenimageio-dev libopenexr-dev
           openimageio-tools python3-openimageio nlohmann-json3-dev libgtest-dev
-          libopencolorio-dev opencolorio-tools
+          libopencolorio-dev opencolorio-tools libbenchmark-dev
           # for the SlurmFarm test only: a one-node Slurm on localhost
           slurmctld slurmd slurm-client munge)
 missing=()

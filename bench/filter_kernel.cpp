@@ -1,0 +1,90 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Microbenchmark of the regression filter's kernel (Google Benchmark):
+// the time per pixel of regression_filter() on synthetic scenes at
+// several noise levels. The adaptive radius makes the cost follow the
+// content: noisier images grow bigger windows, and a window that stops at
+// radius R costs about (4/3) R^3 point visits (docs/PERFORMANCE.md), so the
+// counters report the mean radius too.
+//
+//   build/bin/zdenoise_bench_filter                      # all cases
+//   build/bin/zdenoise_bench_filter --benchmark_filter=Staircase
+//
+// Counters: per_px (time per output pixel; CPU time, or wall time for the
+// thread cases), mean_radius, windows.
+
+#include <benchmark/benchmark.h>
+
+#include <zdenoise/zdenoise.h>
+
+#include "synthetic_scenes.h"
+
+namespace {
+
+constexpr int kSize = 192;
+
+/// The quotient (noisy / albedo) and guides of a scene, made once per case.
+struct KernelInput {
+    synth::Scene scene;
+    OIIO::ImageBuf quotient;
+    zdenoise::Guides guides;
+
+    explicit KernelInput(synth::Scene s)
+        : scene(std::move(s))
+    {
+        quotient = zdenoise::demodulate(scene.noisy, scene.albedo);
+        guides.normal    = &scene.normal;
+        guides.depth     = &scene.depth;
+        guides.object_id = &scene.object_id;
+    }
+};
+
+void
+run_filter(benchmark::State& state, const KernelInput& in, int nthreads)
+{
+    zdenoise::FilterStats stats;
+    for (auto _ : state) {
+        OIIO::ImageBuf out = zdenoise::regression_filter(in.quotient, in.scene.albedo, in.guides,
+                                                         {}, &stats, {}, nthreads);
+        benchmark::DoNotOptimize(out.localpixels());
+    }
+    const double pixels = double(stats.pixels) * double(state.iterations());
+    // Seconds per pixel (printed with an SI prefix: "12.3u" is 12.3 us).
+    state.counters["per_px"] = benchmark::Counter(pixels, benchmark::Counter::kIsRate
+                                                              | benchmark::Counter::kInvert);
+    state.counters["mean_radius"] = stats.mean_radius;
+    state.counters["windows"]     = double(stats.windows);
+}
+
+/// Staircase (treads with depth steps and lighting edges), range(0) = spp.
+void
+Staircase(benchmark::State& state)
+{
+    const KernelInput in(synth::staircase(kSize, kSize, 8, { int(state.range(0)), 7 }));
+    run_filter(state, in, 1);
+}
+
+/// Fine texture under smooth light: windows grow until the noise is gone.
+void
+FineTexture(benchmark::State& state)
+{
+    const KernelInput in(synth::fine_texture(kSize, kSize, { int(state.range(0)), 7 }));
+    run_filter(state, in, 1);
+}
+
+/// Thread scaling on the staircase at 8 spp: range(0) = threads.
+void
+StaircaseThreads(benchmark::State& state)
+{
+    const KernelInput in(synth::staircase(kSize, kSize, 8, { 8, 7 }));
+    run_filter(state, in, int(state.range(0)));
+}
+
+}  // namespace
+
+BENCHMARK(Staircase)->Arg(2)->Arg(8)->Arg(32)->Arg(128)->Unit(benchmark::kMillisecond);
+BENCHMARK(FineTexture)->Arg(2)->Arg(8)->Arg(32)->Arg(128)->Unit(benchmark::kMillisecond);
+BENCHMARK(StaircaseThreads)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+BENCHMARK_MAIN();
