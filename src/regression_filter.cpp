@@ -174,6 +174,14 @@ public:
     /// Fit and splat the window of fit point (x0, y0).
     StopReason process(int x0, int y0, int& radius);
 
+    /// The radius tried after R: R + 1, or R * radius_growth (at least
+    /// R + 1), never beyond r_max.
+    int next_radius(int R) const
+    {
+        const int grown = int(float(R) * m_opt.radius_growth);
+        return std::min(std::max(R + 1, grown), m_opt.r_max);
+    }
+
 private:
     size_t cache_index(int dx, int dy) const
     {
@@ -427,7 +435,7 @@ WindowFitter::process(int x0, int y0, int& radius)
 
     WindowFit previous, current;
     StopReason reason = StopReason::Size;
-    for (int R = m_opt.r_min;; ++R) {
+    for (int R = m_opt.r_min;; R = next_radius(R)) {
         grow_to(R);
         current = fit(R);
         if (edge_fires(current)) {
@@ -485,6 +493,8 @@ check_options(ImageBuf& dst, const FilterOptions& o)
         return bad("normal_cut", o.normal_cut, "needs -1 <= normal_cut < 1");
     if (!(o.normal_power > 0.0f) || !std::isfinite(o.normal_power))
         return bad("normal_power", o.normal_power, "needs a finite number > 0");
+    if (!(o.radius_growth >= 1.0f && o.radius_growth <= 4.0f))
+        return bad("radius_growth", o.radius_growth, "needs 1 <= radius_growth <= 4");
     if (o.centre_stride < 1 || o.centre_stride > o.r_min + 1)
         return bad("centre_stride", o.centre_stride,
                    "needs 1 <= centre_stride <= r_min + 1 (windows must "

@@ -648,10 +648,13 @@ Filter::run(RefStats* stats)
                 continue;
             ++st.windows;
             Window fin;
-            for (int R = opt.r_min; R <= opt.r_max; ++R) {
+            // Radii r_min, then max(R + 1, floor(R * radius_growth)) up
+            // to r_max; an edge steps back to the radius tried before.
+            int before = 0;
+            for (int R = opt.r_min;;) {
                 Window W = window(x0, y0, R);
                 if (W.edge) {
-                    fin = (R > opt.r_min) ? window(x0, y0, R - 1) : W;
+                    fin = (R > opt.r_min) ? window(x0, y0, before) : W;
                     ++st.stop_edge;
                     break;
                 }
@@ -665,6 +668,8 @@ Filter::run(RefStats* stats)
                     ++st.stop_size;
                     break;
                 }
+                before = R;
+                R = std::min(std::max(R + 1, int(float(R) * opt.radius_growth)), opt.r_max);
             }
             radius_sum += fin.R;
             if (!fin.whole.present) {

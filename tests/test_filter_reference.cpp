@@ -243,6 +243,27 @@ TEST(FilterReference, EdgeStopsAndQualityStopsWithLargerWindows)
     run_case(q);
 }
 
+TEST(FilterReference, GeometricRadiusGrowth)
+{
+    // radius_growth 1.5 tries radii 2, 3, 4, 6, 8 and 2 tries 2, 4, 8 (up
+    // to r_max); an edge steps back to the radius tried before, not R - 1.
+    for (float growth : { 1.5f, 2.0f }) {
+        const std::string g = ", growth " + std::to_string(growth);
+        Case k{ "shadow edge, 16 spp, normal, depth, r_max 5" + g,
+                synth::shadow_edge(W, H, { 16, 31 }) };
+        k.normal = k.depth  = true;
+        k.opt.radius_growth = growth;
+        run_case(k);
+        Case q{ "staircase, 128 spp, depth, halves, r_max 8" + g,
+                synth::staircase(W, H, 9, { 128, 29 }) };
+        q.depth = q.halves  = true;
+        q.opt.r_max         = 8;
+        q.opt.radius_growth = growth;
+        q.whole_denoise     = true;
+        run_case(q);
+    }
+}
+
 TEST(FilterReference, VarianceGuideWinsOverHalves)
 {
     Case k{ "texture, variance + halves", synth::fine_texture(W, H, { 16, 14 }) };

@@ -126,6 +126,8 @@ Filter parameters (docs/FILTER.md):
   --normal-cut X       Normal weight is 0 at or below this dot product (0.5)
   --normal-power X     Normal weight exponent (4)
   --quadrant-power X   Quadrant weight exponent (8)
+  --radius-growth X    Radius tried after R: max(R+1, R*X) (2: radii 2, 4, 8,
+                       16; 1 = ALGORITHM.md's R+1, as --preset spec)
   --stride N           Speed option: fit windows at every N-th pixel only
                        (1 = the exact filter; see docs/PERFORMANCE.md)
 
