@@ -5,7 +5,9 @@
 // take their values as the following arguments, input options take an
 // optional `:ch=` modifier selecting channels (`--albedo:ch=R,G,B a.exr`).
 
+#include <cctype>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -145,6 +147,9 @@ Frame sequences (oiiotool's conventions) and batches:
                        share/zdenoise/farm/zdenoise-sbatch).
 
 General:
+  --mem-limit SIZE     Refuse a frame needing more memory than SIZE (bytes,
+                       or with a K, M, G or T suffix), before reading its
+                       pixels. Default: half the machine's memory.
   --threads N          Threads (default: all cores); results do not depend
                        on it.
   -v                   Verbose: inputs, parameters, progress, timings,
@@ -193,6 +198,28 @@ parse_int(const std::string& opt, const std::string& value)
         fail(format("{} needs a whole number, got '{}'", opt, value),
              kExitUsage);
     return v;
+}
+
+/// "8G", "512M", "1048576": a size in bytes, with a binary suffix.
+uint64_t
+parse_size(const std::string& opt, const std::string& value)
+{
+    std::string digits = value;
+    double scale       = 1.0;
+    const std::string suffixes = "KMGT";
+    if (!digits.empty()) {
+        size_t k = suffixes.find(char(std::toupper(digits.back())));
+        if (k != std::string::npos) {
+            scale = std::ldexp(1.0, 10 * int(k + 1));
+            digits.pop_back();
+        }
+    }
+    const double v = parse_number(opt, digits) * scale;
+    if (v < 1.0 || v > 1.8e19)
+        fail(format("{} needs a size such as 512M or 8G, got '{}'", opt,
+                    value),
+             kExitUsage);
+    return uint64_t(v);
 }
 
 Args
@@ -271,6 +298,8 @@ parse_args(int argc, char* argv[])
             a.output = value(opt);
         } else if (opt == "--write-recipe") {
             a.recipe = value(opt);
+        } else if (opt == "--mem-limit") {
+            a.job.mem_limit = parse_size(opt, value(opt));
         } else if (opt == "--preset") {
             value(opt);  // applied above
         } else if (opt == "--frames") {
@@ -346,10 +375,35 @@ parse_args(int argc, char* argv[])
 }
 
 
+// Interruption (SIGINT, SIGTERM): the only files zdenoise creates before
+// their final rename are temporary ones, so the handler removes the one
+// being written and exits with the shell's 128 + signal. A handler may
+// call only async-signal-safe functions: unlink, _exit, and reading the
+// name write_atomically() prepared.
+extern "C" void
+on_interrupt(int signal)
+{
+    if (const char* tmp = job::temporary_file_in_flight())
+        ::unlink(tmp);
+    ::_exit(128 + signal);
+}
+
+void
+remove_temporary_files_on_interrupt()
+{
+    struct sigaction action = {};
+    action.sa_handler       = on_interrupt;
+    sigemptyset(&action.sa_mask);
+    for (int signal : { SIGINT, SIGTERM })
+        sigaction(signal, &action, nullptr);
+}
+
+
 int
 run(int argc, char* argv[])
 {
     Args a = parse_args(argc, argv);
+    remove_temporary_files_on_interrupt();
     std::string err;
     if (!a.recipe.empty() && cli::is_batch(a.job, a.recipe, a.batch))
         fail("--write-recipe writes the recipe of one image: no frame "

@@ -13,6 +13,12 @@
 namespace zdenoise {
 namespace job {
 
+/// The temporary file write_atomically() is writing right now, or null.
+/// Async-signal-safe, for a handler that must remove it before exiting
+/// (zdenoise writes one file at a time).
+const char*
+temporary_file_in_flight();
+
 /// Write `image` to `path` through a temporary file in the same folder,
 /// renamed over `path` only once complete. On failure the temporary file is
 /// removed, any existing `path` is untouched, and `error` says why.

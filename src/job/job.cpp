@@ -6,12 +6,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <map>
 #include <memory>
+#include <set>
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imagebufalgo_util.h>
+#include <OpenImageIO/imagecache.h>
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
@@ -55,8 +58,44 @@ window_text(const ROI& r)
 }
 
 
+/// The format named by a file's extension, "" when no reader claims it.
+std::string
+format_of_extension(const std::string& path)
+{
+    std::string ext = Strutil::lower(Filesystem::extension(path, false));
+    for (const auto& format_exts : get_extension_map())
+        for (const std::string& e : format_exts.second)
+            if (e == ext)
+                return format_exts.first;
+    return "";
+}
+
+
+/// The names a multipart EXR's part k > 0 gives its channels C in the
+/// file's channel list: PART.C unless already so named.
+std::vector<std::string>
+part_channel_names(const ImageSpec& part)
+{
+    const std::string name = part.get_string_attribute("name");
+    std::vector<std::string> names;
+    for (const std::string& c : part.channelnames)
+        names.push_back(name.empty() || Strutil::starts_with(c, name + ".")
+                            ? c
+                            : name + "." + c);
+    return names;
+}
+
+
+/// An input file's headers, checked: part 0's, and the channel names of
+/// all its parts (as InputFile has them).
+struct InputHeader {
+    ImageSpec spec;
+    std::vector<std::string> channelnames;
+    int parts = 1;
+};
+
 /// One input file: the channels of all its parts (a multipart EXR's part
-/// k > 0 contributes its channels C as PART.C unless already so named), as
+/// k > 0 contributes its channels as part_channel_names() names them), as
 /// float, with each channel's pixel type in the file.
 struct InputFile {
     ImageBuf image;
@@ -64,19 +103,61 @@ struct InputFile {
 };
 
 
-/// Input files, each read once however many roles it serves.
+/// Input files, each read once however many roles it serves. Headers are
+/// read first (header()), so that a bad file or a frame too large for
+/// memory is refused before any pixel is allocated; pixels on first use
+/// (get()).
 class InputFiles {
 public:
+    const InputHeader& header(const std::string& path)
+    {
+        auto it = m_headers.find(path);
+        if (it != m_headers.end())
+            return it->second;
+        if (!Filesystem::exists(path))
+            fail(format("cannot read '{}': no such file", path));
+        if (Filesystem::file_size(path) == 0)
+            fail(format("cannot read '{}': the file is empty", path));
+        // ImageBuf takes headers from OIIO's shared ImageCache, which
+        // notices a file rewritten by another process only when its time
+        // stamp (in seconds) changes: a long-lived host (the OIIO plugin)
+        // must not denoise a re-rendered frame with the old one's header.
+        ImageCache::create(true)->invalidate(ustring(path), true);
+        const ImageBuf first = checked_part(path, 0);
+        // OIIO falls back to reading by content; a file whose contents
+        // contradict its name was most likely written wrongly upstream.
+        const std::string named = format_of_extension(path);
+        const std::string found = std::string(first.file_format_name());
+        if (!named.empty() && named != found)
+            fail(format("cannot read '{}': it is a {} file, not {} as its "
+                        "name says",
+                        path, found, named));
+        InputHeader h;
+        h.spec         = first.spec();
+        h.channelnames = h.spec.channelnames;
+        h.parts        = first.nsubimages();
+        for (int part = 1; part < h.parts; ++part) {
+            const ImageBuf buf = checked_part(path, part);
+            if (!same_pixels(first.roi(), buf.roi()))
+                fail(format("'{}': part {} ('{}') is {}, part 0 is {}: "
+                            "zdenoise needs every part to cover the same "
+                            "pixels",
+                            path, part, buf.spec().get_string_attribute("name"),
+                            window_text(buf.roi()), window_text(first.roi())));
+            for (const std::string& c : part_channel_names(buf.spec()))
+                h.channelnames.push_back(c);
+        }
+        return m_headers[path] = std::move(h);
+    }
+
     InputFile& get(const std::string& path)
     {
         auto it = m_files.find(path);
         if (it != m_files.end())
             return *it->second;
-        if (!Filesystem::exists(path))
-            fail(format("cannot read '{}': no such file", path));
+        const int parts = header(path).parts;
         auto file = std::make_unique<InputFile>();
         file->image = read_part(path, 0, file->formats);
-        const int parts = file->image.nsubimages();
         for (int part = 1; part < parts; ++part)
             append_part(*file, path, part);
         return *(m_files[path] = std::move(file));
@@ -85,8 +166,8 @@ public:
     ImageBuf& image(const std::string& path) { return get(path).image; }
 
 private:
-    static ImageBuf read_part(const std::string& path, int part,
-                              std::vector<TypeDesc>& formats)
+    /// Part `part`'s header; a deep part or one without pixels is refused.
+    static ImageBuf checked_part(const std::string& path, int part)
     {
         ImageBuf buf(path, part);
         if (!buf.init_spec(path, part, 0))
@@ -95,6 +176,18 @@ private:
         if (buf.deep())
             fail(format("cannot read '{}': deep images are not supported",
                         path));
+        const ImageSpec& s = buf.spec();
+        if (s.width < 1 || s.height < 1 || s.depth != 1)
+            fail(format("cannot read '{}': its data window is {}x{}x{}; "
+                        "zdenoise needs a 2D image of at least one pixel",
+                        path, s.width, s.height, s.depth));
+        return buf;
+    }
+
+    static ImageBuf read_part(const std::string& path, int part,
+                              std::vector<TypeDesc>& formats)
+    {
+        ImageBuf buf(path, part);
         if (!buf.read(part, 0, true, TypeFloat))
             fail(format("cannot read '{}': {}", path,
                         one_line(buf.geterror())));
@@ -111,17 +204,9 @@ private:
         std::vector<TypeDesc> formats;
         ImageBuf buf = read_part(path, part, formats);
         const ImageSpec& spec = buf.spec();
-        const std::string name = spec.get_string_attribute("name");
-        if (!same_pixels(file.image.roi(), buf.roi()))
-            fail(format("'{}': part {} ('{}') is {}, part 0 is {}: zdenoise "
-                        "needs every part to cover the same pixels",
-                        path, part, name, window_text(buf.roi()),
-                        window_text(file.image.roi())));
         std::vector<std::string> names = file.image.spec().channelnames;
-        for (const std::string& c : spec.channelnames)
-            names.push_back(name.empty() || Strutil::starts_with(c, name + ".")
-                                ? c
-                                : name + "." + c);
+        for (const std::string& c : part_channel_names(spec))
+            names.push_back(c);
         ImageSpec merged_spec = file.image.spec();
         for (const ParamValue& p : spec.extra_attribs)
             if (!merged_spec.find_attribute(p.name()))
@@ -143,6 +228,7 @@ private:
                             formats.end());
     }
 
+    std::map<std::string, InputHeader> m_headers;
     std::map<std::string, std::unique_ptr<InputFile>> m_files;
 };
 
@@ -164,10 +250,15 @@ load_role(InputFiles& files, const InputArg& arg, Role role,
     if (!select_channels(src.spec().channelnames, arg.channels, role,
                               r.indices, err))
         fail(format("{} '{}': {}", role_name(role), arg.path, err));
+    // A file covering more pixels than the noisy input (a guide rendered
+    // without the beauty's crop) is cut to them; one covering fewer cannot
+    // be used.
     const ROI a = src.roi();
     const ROI b = reference ? reference->roi() : a;
-    if (!same_pixels(a, b))
-        fail(format("{} '{}' is {}, but the noisy input '{}' is {}: they must "
+    const ROI have(a.xbegin, a.xend, a.ybegin, a.yend);
+    const ROI need(b.xbegin, b.xend, b.ybegin, b.yend);
+    if (roi_intersection(have, need) != need)
+        fail(format("{} '{}' is {}, but the noisy input '{}' is {}: it must "
                     "cover the same pixels",
                     role_name(role), arg.path, window_text(a), reference_path,
                     window_text(b)));
@@ -179,6 +270,13 @@ load_role(InputFiles& files, const InputArg& arg, Role role,
                                 r.indices, {}, names))
         fail(format("{} '{}': {}", role_name(role), arg.path,
                     one_line(r.image.geterror())));
+    if (have != need) {
+        ImageBuf cropped;
+        if (!ImageBufAlgo::crop(cropped, r.image, need))
+            fail(format("{} '{}': {}", role_name(role), arg.path,
+                        one_line(cropped.geterror())));
+        r.image = std::move(cropped);
+    }
     return r;
 }
 
@@ -478,14 +576,54 @@ set_write_formats(ImageBuf& out, std::vector<TypeDesc> formats,
 }
 
 
+/// Bytes a pixel of the noisy input costs beyond the input files' own
+/// pixels (read as float): the role images (up to ~24 float channels), the
+/// demodulated, filtered and denoised radiance (3 x 4 floats), and the
+/// filter's per-pixel planes and accumulators (~130 bytes,
+/// src/filter_inputs.h and src/regression_filter.cpp). Rounded up: the
+/// guard must err on the side of refusing.
+constexpr uint64_t kWorkingBytesPerPixel = 384;
+
+std::string
+gibibytes(uint64_t bytes)
+{
+    return format("{:.1f} GiB", double(bytes) / double(uint64_t(1) << 30));
+}
+
+/// Refuse, before any pixel is read, a job whose frame would need more
+/// memory than allowed: an oversized (or corrupt) header must fail with a
+/// message, not get the process killed by the kernel.
+void
+check_memory(const Job& j, InputFiles& files)
+{
+    const uint64_t limit = j.mem_limit ? j.mem_limit : default_memory_limit();
+    const InputHeader& in  = files.header(j.in.path);
+    const ImageSpec& noisy = in.spec;
+    uint64_t bytes_per_pixel = kWorkingBytesPerPixel;
+    std::set<std::string> seen;
+    for (const std::string& path : input_paths(j))
+        if (seen.insert(path).second)
+            bytes_per_pixel
+                += 4 * uint64_t(files.header(path).channelnames.size());
+    // In double: a corrupt header's sizes may overflow 64-bit products.
+    const double needed = double(bytes_per_pixel) * double(noisy.width)
+                          * double(noisy.height);
+    if (needed > double(limit))
+        fail(format("'{}' is {}x{} with {} channels: denoising it needs about "
+                    "{}, more than the memory limit of {}",
+                    j.in.path, noisy.width, noisy.height, in.channelnames.size(),
+                    gibibytes(uint64_t(std::min(needed, 1.8e19))),
+                    gibibytes(limit)));
+}
+
+
 void
 run(Job j, JobResult& result)
 {
     InputFiles files;
     Timer read_timer;
-    InputFile& input = files.get(j.in.path);
-    ImageBuf& noisy  = input.image;
-    const Convention conv = detect_convention(noisy.spec().channelnames);
+    const Convention conv
+        = detect_convention(files.header(j.in.path).channelnames);
     apply_defaults(j, conv, result.log);
     const std::vector<LayerArg>& layer_args = j.layers.empty() ? conv.layers
                                                                : j.layers;
@@ -499,6 +637,9 @@ run(Job j, JobResult& result)
         fail(format("no albedo: '{}' has no Denoising Albedo pass; give "
                     "--albedo FILE",
                     j.in.path));
+    check_memory(j, files);
+    InputFile& input = files.get(j.in.path);
+    ImageBuf& noisy  = input.image;
 
     RoleImage radiance = load_role(files, j.in, Role::Radiance, nullptr,
                                    "");
@@ -745,6 +886,34 @@ layer_text(const LayerArg& layer)
     return layer.name + "=" + layer.radiance + ":" + layer.albedo
            + (layer.divided ? ":divided" : "")
            + (layer.reflected ? ":reflected" : "");
+}
+
+
+uint64_t
+default_memory_limit()
+{
+    // Half of the RAM, or of the cgroup's limit when the job runs in a
+    // container or a farm slot with one: what the kernel's OOM killer
+    // enforces.
+    uint64_t total = 0;
+    std::ifstream meminfo("/proc/meminfo");
+    std::string key;
+    uint64_t kib = 0;
+    while (meminfo >> key >> kib) {
+        if (key == "MemTotal:") {
+            total = kib * 1024;
+            break;
+        }
+        meminfo.ignore(256, '\n');
+    }
+    std::ifstream cgroup("/sys/fs/cgroup/memory.max");
+    uint64_t cgroup_max = 0;
+    if (cgroup >> cgroup_max && cgroup_max > 0
+        && (total == 0 || cgroup_max < total))
+        total = cgroup_max;
+    if (total == 0)
+        total = uint64_t(8) << 30;  // unknown: assume a modest machine
+    return total / 2;
 }
 
 

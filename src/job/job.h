@@ -11,6 +11,7 @@
 
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -56,6 +57,9 @@ struct Job {
     /// channel's. Cryptomatte channels are float whatever this says.
     OIIO::TypeDesc data_type = OIIO::TypeUnknown;
     int threads = 0;  ///< 0: OIIO's "threads" attribute
+    /// Largest memory (bytes) a frame may need; a larger frame is refused
+    /// before its pixels are read. 0: default_memory_limit().
+    uint64_t mem_limit = 0;
 };
 
 struct JobResult {
@@ -90,6 +94,11 @@ layer_text(const LayerArg& layer);
 /// file, channel or option at fault. Never throws.
 bool
 run_job(const Job& job, JobResult& result, std::string& error);
+
+/// Half of the machine's memory (MemTotal, or the cgroup's memory.max when
+/// lower): room for the frame and whatever else runs on a render node.
+uint64_t
+default_memory_limit();
 
 /// Every input path of the job (to refuse an output that is an input).
 std::vector<std::string>
