@@ -5,6 +5,8 @@ set -euo pipefail
 packages=(g++ cmake make pkg-config libopenimageio-dev libopenexr-dev
           openimageio-tools python3-openimageio nlohmann-json3-dev libgtest-dev
           libopencolorio-dev opencolorio-tools libbenchmark-dev
+          # the fuzz targets (scripts/fuzz.sh, CI)
+          clang libclang-rt-14-dev
           # for the SlurmFarm test only: a one-node Slurm on localhost
           slurmctld slurmd slurm-client munge)
 missing=()

@@ -1,0 +1,95 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Fuzzing the channel selection (`:ch=` and the Cycles defaults) with any
+// file's channel names: it must never crash, and what it accepts must be a
+// usable selection.
+//
+// Input: byte 0 chooses the role; the rest is "SELECTION\nNAME\nNAME...".
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "../../src/job/channel_spec.h"
+
+using namespace zdenoise::job;
+
+namespace {
+
+[[noreturn]] void
+violated(const char* what)
+{
+    std::fprintf(stderr, "fuzz_channel_spec: %s\n", what);
+    std::abort();
+}
+
+bool
+count_ok(Role role, size_t n)
+{
+    switch (role) {
+    case Role::Radiance: return n == 3 || n == 4;
+    case Role::Albedo:
+    case Role::Normal: return n == 3;
+    case Role::Depth: return n == 1;
+    case Role::Variance: return n == 1 || n == 3;
+    case Role::ObjectId: return n == 1 || (n >= 2 && n % 2 == 0);
+    }
+    return false;
+}
+
+}  // namespace
+
+
+extern "C" int
+LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
+{
+    if (size < 1)
+        return 0;
+    const Role role = Role(data[0] % 6);
+    std::vector<std::string> lines(1);
+    for (size_t i = 1; i < size; ++i) {
+        if (data[i] == '\n')
+            lines.emplace_back();
+        else
+            lines.back() += char(data[i]);
+    }
+    const std::string selection = lines[0];
+    const std::vector<std::string> names(lines.begin() + 1, lines.end());
+
+    std::vector<int> indices;
+    std::string error;
+    if (select_channels(names, selection, role, indices, error)) {
+        if (!count_ok(role, indices.size()))
+            violated("accepted a channel count the role cannot use");
+        std::set<int> distinct;
+        for (int i : indices) {
+            if (i < 0 || size_t(i) >= names.size())
+                violated("selected a channel index out of range");
+            distinct.insert(i);
+        }
+        // The same channel twice is the user's choice with explicit names,
+        // never the result of a layer or default lookup.
+        if (selection.find(',') == std::string::npos
+            && distinct.size() != indices.size())
+            violated("a layer lookup picked one channel twice");
+    } else if (error.empty()) {
+        violated("refused without a message");
+    } else if (error.find('\n') != std::string::npos) {
+        violated("an error message of more than one line");
+    }
+
+    std::string prefix;
+    if (cycles_prefix(names, prefix)) {
+        bool found = false;
+        for (const std::string& n : names)
+            found = found || n == prefix + "Combined.R";
+        if (!found)
+            violated("a Cycles prefix without its Combined.R channel");
+    }
+    return 0;
+}
