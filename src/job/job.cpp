@@ -576,13 +576,17 @@ set_write_formats(ImageBuf& out, std::vector<TypeDesc> formats,
 }
 
 
-/// Bytes a pixel of the noisy input costs beyond the input files' own
-/// pixels (read as float): the role images (up to ~24 float channels), the
-/// demodulated, filtered and denoised radiance (3 x 4 floats), and the
-/// filter's per-pixel planes and accumulators (~130 bytes,
-/// src/filter_inputs.h and src/regression_filter.cpp). Rounded up: the
-/// guard must err on the side of refusing.
-constexpr uint64_t kWorkingBytesPerPixel = 384;
+/// The memory a frame needs besides its input files' pixels (read as
+/// float). Per pixel of the frame: the role images (up to 24 float
+/// channels), the demodulated, filtered and denoised radiance (3 x 4
+/// floats) and the output plane. Per pixel of one filter tile with its halo
+/// (src/regression_filter.cpp: 1024 x 1024 plus 2 (2 r_max + 4)): the
+/// filter's planes and accumulators, ~130 bytes. Rounded up: the guard must
+/// err on the side of refusing. Measured: 1024 x 1024 RGBA half with
+/// albedo, normal and depth peaks at 352 MiB, estimated 396 MiB.
+constexpr double kFrameBytesPerPixel = 160;
+constexpr double kTileBytesPerPixel  = 192;
+constexpr double kFilterTile         = 1024;
 
 std::string
 gibibytes(uint64_t bytes)
@@ -599,15 +603,17 @@ check_memory(const Job& j, InputFiles& files)
     const uint64_t limit = j.mem_limit ? j.mem_limit : default_memory_limit();
     const InputHeader& in  = files.header(j.in.path);
     const ImageSpec& noisy = in.spec;
-    uint64_t bytes_per_pixel = kWorkingBytesPerPixel;
+    double bytes_per_pixel = kFrameBytesPerPixel;
     std::set<std::string> seen;
     for (const std::string& path : input_paths(j))
         if (seen.insert(path).second)
-            bytes_per_pixel
-                += 4 * uint64_t(files.header(path).channelnames.size());
+            bytes_per_pixel += 4.0 * files.header(path).channelnames.size();
     // In double: a corrupt header's sizes may overflow 64-bit products.
-    const double needed = double(bytes_per_pixel) * double(noisy.width)
-                          * double(noisy.height);
+    const double tile = kFilterTile + 4.0 * j.filter.r_max + 8.0;
+    const double needed
+        = bytes_per_pixel * double(noisy.width) * double(noisy.height)
+          + kTileBytesPerPixel * std::min(double(noisy.width), tile)
+                * std::min(double(noisy.height), tile);
     if (needed > double(limit))
         fail(format("'{}' is {}x{} with {} channels: denoising it needs about "
                     "{}, more than the memory limit of {}",
