@@ -6,6 +6,9 @@
 // usable selection.
 //
 // Input: byte 0 chooses the role; the rest is "SELECTION\nNAME\nNAME...".
+// A NUL also separates lines: EXR channel names and command-line arguments
+// are NUL-terminated, so neither can hold one (and OIIO's string matching
+// stops at one).
 
 #include <cstddef>
 #include <cstdint>
@@ -53,7 +56,7 @@ LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     const Role role = Role(data[0] % 6);
     std::vector<std::string> lines(1);
     for (size_t i = 1; i < size; ++i) {
-        if (data[i] == '\n')
+        if (data[i] == '\n' || data[i] == '\0')
             lines.emplace_back();
         else
             lines.back() += char(data[i]);
