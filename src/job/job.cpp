@@ -589,9 +589,11 @@ constexpr double kTileBytesPerPixel  = 192;
 constexpr double kFilterTile         = 1024;
 
 std::string
-gibibytes(uint64_t bytes)
+readable_size(double bytes)
 {
-    return format("{:.1f} GiB", double(bytes) / double(uint64_t(1) << 30));
+    const double mib = bytes / double(1 << 20);
+    return mib < 1024.0 ? format("{:.0f} MiB", mib)
+                        : format("{:.1f} GiB", mib / 1024.0);
 }
 
 /// Refuse, before any pixel is read, a job whose frame would need more
@@ -618,8 +620,7 @@ check_memory(const Job& j, InputFiles& files)
         fail(format("'{}' is {}x{} with {} channels: denoising it needs about "
                     "{}, more than the memory limit of {}",
                     j.in.path, noisy.width, noisy.height, in.channelnames.size(),
-                    gibibytes(uint64_t(std::min(needed, 1.8e19))),
-                    gibibytes(limit)));
+                    readable_size(needed), readable_size(double(limit))));
 }
 
 
