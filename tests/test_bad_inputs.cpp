@@ -521,18 +521,35 @@ spawn_cli(const std::vector<std::string>& args, const std::string& err_path)
     return pid;
 }
 
-/// Wait up to `seconds` for `ready()`; false if `pid` exits first.
+/// A started command and, once it has ended, its exit status (minus the
+/// signal number when a signal killed it).
+struct Child {
+    pid_t pid  = -1;
+    int status = 0;
+    bool ended = false;
+
+    void reap(int options)
+    {
+        int s = 0;
+        if (!ended && ::waitpid(pid, &s, options) == pid) {
+            ended  = true;
+            status = WIFEXITED(s) ? WEXITSTATUS(s) : -WTERMSIG(s);
+        }
+    }
+};
+
+/// Wait up to `seconds` for `ready()`; false if the child ends first.
 template<class Ready>
 bool
-wait_while_running(pid_t pid, double seconds, Ready ready)
+wait_while_running(Child& child, double seconds, Ready ready)
 {
     const auto end = std::chrono::steady_clock::now()
                      + std::chrono::duration<double>(seconds);
     while (std::chrono::steady_clock::now() < end) {
         if (ready())
             return true;
-        int status;
-        if (::waitpid(pid, &status, WNOHANG) == pid)
+        child.reap(WNOHANG);
+        if (child.ended)
             return false;
         std::this_thread::sleep_for(std::chrono::microseconds(200));
     }
@@ -540,11 +557,10 @@ wait_while_running(pid_t pid, double seconds, Ready ready)
 }
 
 int
-exit_status(pid_t pid)
+exit_status(Child& child)
 {
-    int status = 0;
-    ::waitpid(pid, &status, 0);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+    child.reap(0);
+    return child.status;
 }
 
 }  // namespace
@@ -565,21 +581,23 @@ TEST_F(BadInputTest, InterruptedWhileFilteringLeavesNothing)
         const std::string err = Filesystem::temp_directory_path()
                                 + "/zdenoise_interrupt_"
                                 + std::to_string(::getpid()) + ".txt";
-        pid_t pid = spawn_cli({ "--in", path("noisy.exr"), "--albedo",
+        Child child;
+        child.pid = spawn_cli({ "--in", path("noisy.exr"), "--albedo",
                                 path("albedo.exr"), "-o", path("out.exr"),
                                 "--eta", "0.0001", "-v" },
                               err);
-        ASSERT_GT(pid, 0);
-        const bool filtering = wait_while_running(pid, 120, [&] {
+        ASSERT_GT(child.pid, 0);
+        const bool filtering = wait_while_running(child, 120, [&] {
             return slurp(err).find("filtering") != std::string::npos;
         });
         if (filtering)
-            ::kill(pid, signal);
-        const int status = exit_status(pid);
+            ::kill(child.pid, signal);
+        const int status = exit_status(child);
+        const std::string stderr_text = slurp(err);
         Filesystem::remove(err);
         ASSERT_TRUE(filtering) << "zdenoise ended before it could be "
                                   "interrupted (status "
-                               << status << ")";
+                               << status << "):\n" << stderr_text;
         EXPECT_EQ(status, 128 + signal);
         EXPECT_EQ(slurp(path("out.exr")), old_output);
         EXPECT_EQ(files(), before);
@@ -602,19 +620,20 @@ TEST_F(BadInputTest, InterruptedWhileWritingRemovesTheTemporaryFile)
     const std::string err = Filesystem::temp_directory_path()
                             + "/zdenoise_interrupt_"
                             + std::to_string(::getpid()) + ".txt";
-    pid_t pid = spawn_cli({ "--in", path("noisy.exr"), "--albedo",
+    Child child;
+    child.pid = spawn_cli({ "--in", path("noisy.exr"), "--albedo",
                             path("albedo.exr"), "-o", path("out.exr"),
                             "--eta", "0.5", "--rmax", "3" },
                           err);
-    ASSERT_GT(pid, 0);
-    const std::string tmp = path(".out.exr.zdenoise-tmp-" + std::to_string(pid)
-                                 + ".exr");
-    const bool writing = wait_while_running(pid, 120, [&] {
+    ASSERT_GT(child.pid, 0);
+    const std::string tmp = path(".out.exr.zdenoise-tmp-"
+                                 + std::to_string(child.pid) + ".exr");
+    const bool writing = wait_while_running(child, 120, [&] {
         return Filesystem::exists(tmp);
     });
     if (writing)
-        ::kill(pid, SIGTERM);
-    const int status = exit_status(pid);
+        ::kill(child.pid, SIGTERM);
+    const int status = exit_status(child);
     Filesystem::remove(err);
     if (!writing)
         GTEST_SKIP() << "the write ended before it could be interrupted";
