@@ -14,7 +14,6 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imagebufalgo_util.h>
-#include <OpenImageIO/imagecache.h>
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
@@ -118,11 +117,6 @@ public:
             fail(format("cannot read '{}': no such file", path));
         if (Filesystem::file_size(path) == 0)
             fail(format("cannot read '{}': the file is empty", path));
-        // ImageBuf takes headers from OIIO's shared ImageCache, which
-        // notices a file rewritten by another process only when its time
-        // stamp (in seconds) changes: a long-lived host (the OIIO plugin)
-        // must not denoise a re-rendered frame with the old one's header.
-        ImageCache::create(true)->invalidate(ustring(path), true);
         const ImageBuf first = checked_part(path, 0);
         // OIIO falls back to reading by content; a file whose contents
         // contradict its name was most likely written wrongly upstream.
