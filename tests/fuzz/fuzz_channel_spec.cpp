@@ -1,9 +1,11 @@
 // Copyright zdenoise contributors.
 // SPDX-License-Identifier: BSD-3-Clause
 //
-// Fuzzing the channel selection (`:ch=` and the Cycles defaults) with any
-// file's channel names: it must never crash, and what it accepts must be a
-// usable selection.
+// Fuzzing the channel selection (`:ch=` and the Cycles defaults) and the
+// layer conventions (docs/LAYERS.md) with any file's channel names, and
+// --layer's parser with any argument: they must never crash, what the
+// selection accepts must be a usable selection, and every selection a
+// convention proposes must resolve for its role.
 //
 // Input: byte 0 chooses the role; the rest is "SELECTION\nNAME\nNAME...".
 // A NUL also separates lines: EXR channel names and command-line arguments
@@ -18,7 +20,11 @@
 #include <string>
 #include <vector>
 
+#include <OpenImageIO/strutil.h>
+
 #include "../../src/job/channel_spec.h"
+#include "../../src/job/job.h"
+#include "../../src/job/layer_conventions.h"
 
 using namespace zdenoise::job;
 
@@ -37,12 +43,41 @@ count_ok(Role role, size_t n)
     switch (role) {
     case Role::Radiance: return n == 3 || n == 4;
     case Role::Albedo:
+    case Role::LayerRadiance:
     case Role::Normal: return n == 3;
     case Role::Depth: return n == 1;
     case Role::Variance: return n == 1 || n == 3;
     case Role::ObjectId: return n == 1 || (n >= 2 && n % 2 == 0);
     }
     return false;
+}
+
+/// Does `selection` ('+' joins several) resolve in `names` for `role`?
+bool
+resolves(const std::vector<std::string>& names, const std::string& selection,
+         Role role, bool sum)
+{
+    std::vector<int> indices;
+    std::string error;
+    for (const std::string& part :
+         sum ? OIIO::Strutil::splits(selection, "+")
+             : std::vector<std::string> { selection })
+        if (!select_channels(names, part, role, indices, error))
+            return false;
+    return true;
+}
+
+/// Selections are comma lists and '+' sums of channel and layer names: a
+/// name holding ',' or '+' cannot be named in one, nor one with spaces at
+/// its ends (arguments are trimmed).
+bool
+nameable(const std::vector<std::string>& names)
+{
+    for (const std::string& n : names)
+        if (n.find_first_of(",+") != std::string::npos
+            || OIIO::Strutil::strip(n) != n)
+            return false;
+    return true;
 }
 
 }  // namespace
@@ -53,7 +88,7 @@ LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
 {
     if (size < 1)
         return 0;
-    const Role role = Role(data[0] % 6);
+    const Role role = Role(data[0] % 7);
     std::vector<std::string> lines(1);
     for (size_t i = 1; i < size; ++i) {
         if (data[i] == '\n' || data[i] == '\0')
@@ -93,6 +128,42 @@ LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
             found = found || n == prefix + "Combined.R";
         if (!found)
             violated("a Cycles prefix without its Combined.R channel");
+    }
+
+    const Convention conv = detect_convention(names);
+    if (nameable(names)) {
+        struct {
+            const std::string& selection;
+            Role role;
+        } proposed[] = { { conv.albedo, Role::Albedo },
+                         { conv.normal, Role::Normal },
+                         { conv.depth, Role::Depth },
+                         { conv.id, Role::ObjectId } };
+        for (const auto& p : proposed)
+            if (!p.selection.empty()
+                && !resolves(names, p.selection, p.role, false))
+                violated("a convention proposed a guide that does not "
+                         "resolve");
+        for (const LayerArg& layer : conv.layers)
+            if (!resolves(names, layer.radiance, Role::LayerRadiance, true)
+                || !resolves(names, layer.albedo, Role::LayerRadiance, true))
+                violated("a convention proposed a layer that does not resolve");
+        for (const std::string* sum :
+             { &conv.residual, &conv.residual_albedo })
+            if (!sum->empty()
+                && !resolves(names, *sum, Role::LayerRadiance, true))
+                violated("a convention proposed a residual that does not "
+                         "resolve");
+    }
+
+    // --layer NAME=RADIANCE:ALBEDO[:divided] reads back as it is written.
+    LayerArg layer;
+    if (parse_layer(selection, layer)) {
+        LayerArg again;
+        if (!parse_layer(layer_text(layer), again) || again.name != layer.name
+            || again.radiance != layer.radiance || again.albedo != layer.albedo
+            || again.divided != layer.divided)
+            violated("--layer's text does not read back as the same layer");
     }
     return 0;
 }
