@@ -299,6 +299,34 @@ TEST_F(BadInputTest, FrameTooLargeForMemoryIsRefusedBeforeReading)
 }
 
 
+TEST_F(BadInputTest, MemoryGuardCountsTheLayers)
+{
+    // Arnold-style AOVs: the beauty with its albedo, and two layers with
+    // theirs. Layers mode holds each layer's images besides the beauty's.
+    std::vector<std::string> channels = { "R", "G", "B" };
+    for (const char* layer : { "albedo", "diffuse", "diffuse_albedo",
+                               "specular", "specular_albedo" })
+        for (const char* c : { ".R", ".G", ".B" })
+            channels.push_back(std::string(layer) + c);
+    write_image("aovs.exr", 256, 256, channels, 0.5f);
+    auto needed_mib = [&](const std::string& mode) {
+        RunResult r = run("--in " + path("aovs.exr") + " --mode " + mode
+                          + " --mem-limit 1M -o " + path("out.exr"));
+        expect_one_line_error(r, "memory limit");
+        const size_t at = r.err.find("needs about ");
+        EXPECT_NE(at, std::string::npos) << r.err;
+        return at == std::string::npos ? 0.0
+                                       : std::stod(r.err.substr(at + 12));
+    };
+    const double beauty = needed_mib("beauty");
+    const double layers = needed_mib("layers");
+    EXPECT_GT(beauty, 20.0);
+    // Two layers at least, 3 x 3 floats each.
+    EXPECT_GE(layers - beauty, 2 * 36 * 256 * 256 / double(1 << 20));
+    EXPECT_EQ(files(), (std::vector<std::string> { "aovs.exr" }));
+}
+
+
 TEST_F(BadInputTest, AllZeroAlbedoLeavesTheImageUnchanged)
 {
     // Nothing can be demodulated: every pixel passes through (FILTER.md

@@ -571,15 +571,22 @@ set_write_formats(ImageBuf& out, std::vector<TypeDesc> formats,
 
 
 /// The memory a frame needs besides its input files' pixels (read as
-/// float). Per pixel of the frame: the role images (up to 24 float
-/// channels), the demodulated, filtered and denoised radiance (3 x 4
-/// floats) and the output plane. Per pixel of one filter tile with its halo
-/// (src/regression_filter.cpp: 1024 x 1024 plus 2 (2 r_max + 4)): the
-/// filter's planes and accumulators, ~130 bytes. Rounded up: the guard must
-/// err on the side of refusing. Measured: 1024 x 1024 RGBA half with
-/// albedo, normal and depth peaks at 352 MiB, estimated 396 MiB.
+/// float, each file at its own size). Per pixel of the frame: the role
+/// images (up to 24 float channels), the demodulated, filtered and denoised
+/// radiance (3 x 4 floats) and the output plane. Per pixel of one filter
+/// tile with its halo (src/regression_filter.cpp: 1024 x 1024 plus
+/// 2 (2 r_max + 4)): the filter's planes and accumulators, ~130 bytes. Per
+/// pixel and layer in layers mode (the residual counted as one): the
+/// layer's radiance, albedo and denoised radiance (3 x 3 floats; the
+/// filter's memory is reused from one layer to the next). Rounded up: the
+/// guard must err on the side of refusing. Measured: 1024 x 1024 RGBA half
+/// with albedo, normal and depth peaks at 352 MiB, estimated 396 MiB;
+/// 1024 x 1024 half with albedo and two Arnold-style layers (18 channels),
+/// --rmax 2, peaks at 331 MiB (beauty) and 412 MiB (layers), estimated 424
+/// and 544 MiB.
 constexpr double kFrameBytesPerPixel = 160;
 constexpr double kTileBytesPerPixel  = 192;
+constexpr double kLayerBytesPerPixel = 40;
 constexpr double kFilterTile         = 1024;
 
 std::string
@@ -592,28 +599,37 @@ readable_size(double bytes)
 
 /// Refuse, before any pixel is read, a job whose frame would need more
 /// memory than allowed: an oversized (or corrupt) header must fail with a
-/// message, not get the process killed by the kernel.
+/// message, not get the process killed by the kernel. `layers`: the number
+/// of layers of a layered denoise, 0 for the beauty.
 void
-check_memory(const Job& j, InputFiles& files)
+check_memory(const Job& j, InputFiles& files, size_t layers)
 {
     const uint64_t limit = j.mem_limit ? j.mem_limit : default_memory_limit();
     const InputHeader& in  = files.header(j.in.path);
     const ImageSpec& noisy = in.spec;
-    double bytes_per_pixel = kFrameBytesPerPixel;
+    // In double: a corrupt header's sizes may overflow 64-bit products.
+    const double pixels = double(noisy.width) * double(noisy.height);
+    double needed       = 0.0;
     std::set<std::string> seen;
     for (const std::string& path : input_paths(j))
-        if (seen.insert(path).second)
-            bytes_per_pixel += 4.0 * files.header(path).channelnames.size();
-    // In double: a corrupt header's sizes may overflow 64-bit products.
+        if (seen.insert(path).second) {
+            const InputHeader& h = files.header(path);
+            needed += 4.0 * double(h.channelnames.size())
+                      * double(h.spec.width) * double(h.spec.height);
+        }
+    const double per_pixel
+        = kFrameBytesPerPixel
+          + (layers ? kLayerBytesPerPixel * double(layers + 1) : 0.0);
     const double tile = kFilterTile + 4.0 * j.filter.r_max + 8.0;
-    const double needed
-        = bytes_per_pixel * double(noisy.width) * double(noisy.height)
-          + kTileBytesPerPixel * std::min(double(noisy.width), tile)
-                * std::min(double(noisy.height), tile);
+    needed += per_pixel * pixels
+              + kTileBytesPerPixel * std::min(double(noisy.width), tile)
+                    * std::min(double(noisy.height), tile);
     if (needed > double(limit))
-        fail(format("'{}' is {}x{} with {} channels: denoising it needs about "
-                    "{}, more than the memory limit of {}",
-                    j.in.path, noisy.width, noisy.height, in.channelnames.size(),
+        fail(format("'{}' is {}x{} with {} channels: denoising it{} needs "
+                    "about {}, more than the memory limit of {}",
+                    j.in.path, noisy.width, noisy.height,
+                    in.channelnames.size(),
+                    layers ? " in layers mode" : "",
                     readable_size(needed), readable_size(double(limit))));
 }
 
@@ -638,7 +654,7 @@ run(Job j, JobResult& result)
         fail(format("no albedo: '{}' has no Denoising Albedo pass; give "
                     "--albedo FILE",
                     j.in.path));
-    check_memory(j, files);
+    check_memory(j, files, layered ? layer_args.size() : 0);
     InputFile& input = files.get(j.in.path);
     ImageBuf& noisy  = input.image;
 
