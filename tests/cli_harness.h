@@ -46,6 +46,17 @@ quoted(const std::string& s)
     return q + "'";
 }
 
+/// A program not built with the sanitizers of a sanitized build (Debian's
+/// oiiotool, iinfo, idiff, python3), as the start of a shell command: it
+/// then runs with the sanitizer runtime preloaded, as it must be to load
+/// our instrumented plugin (tests/CMakeLists.txt, ZDENOISE_HOST_ENV).
+inline std::string
+host_program(const std::string& program)
+{
+    const std::string env = ZDENOISE_HOST_ENV;
+    return (env.empty() ? "" : env + " ") + quoted(program);
+}
+
 /// Run a shell command line, capturing its output in `scratch` files.
 inline RunResult
 run_command(const std::string& command, const std::string& scratch)

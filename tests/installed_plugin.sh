@@ -12,6 +12,10 @@ plugin=$(find "$scratch/prefix" -name zdenoise.imageio.so)
 [ -n "$plugin" ] || { echo "zdenoise.imageio.so not installed"; exit 1; }
 "$scratch/prefix/bin/zdenoise" --in "$source_dir/share/samples/cornell_textured_spp16_crop.exr" \
     --write-recipe "$scratch/shot.zdn"
-info=$(env -u LD_LIBRARY_PATH OIIO_LIBRARY_PATH="$(dirname "$plugin")" iinfo "$scratch/shot.zdn")
+# ZDENOISE_HOST_ENV: in a sanitized build, the sanitizer runtime iinfo must
+# preload to load the plugin (tests/CMakeLists.txt); words of VAR=value.
+# shellcheck disable=SC2086
+info=$(env -u LD_LIBRARY_PATH ${ZDENOISE_HOST_ENV:-} \
+       OIIO_LIBRARY_PATH="$(dirname "$plugin")" iinfo "$scratch/shot.zdn")
 echo "$info"
 grep -q "96 x   96, 54 channel, float zdenoise" <<<"$info"

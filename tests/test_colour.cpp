@@ -272,7 +272,7 @@ TEST_F(Colour, OiiotoolWithTheBundledConfigConvertsBackToTheLinearResult)
     r = zdenoise("--in " + path("noisy.exr") + " --albedo " + path("albedo.exr")
                  + " --ocolorspace ACEScg -o " + path("cg.exr"));
     ASSERT_EQ(r.status, 0) << r.err;
-    r = run_command(quoted(oiiotool) + " --colorconfig " + quoted(kBundledConfig) + " "
+    r = run_command(host_program(oiiotool) + " --colorconfig " + quoted(kBundledConfig) + " "
                         + path("cg.exr") + " --colorconvert ACEScg " + quoted(kLinear)
                         + " -o " + path("back.exr"),
                     path(".oiiotool"));
@@ -359,8 +359,9 @@ TEST_F(Colour, RecipeCarriesTheColourOptionsToOiiotool)
     ASSERT_EQ(r.status, 0) << r.err;
     const std::string recipe = slurp(path("shot.zdn"));
     EXPECT_NE(recipe.find("\"ocolorspace\": \"ACEScg\""), std::string::npos) << recipe;
-    r = run_command("OIIO_LIBRARY_PATH=" + quoted(ZDENOISE_PLUGIN_DIR) + " " + quoted(oiiotool)
-                        + " " + path("shot.zdn") + " -o " + path("via_recipe.exr"),
+    r = run_command("OIIO_LIBRARY_PATH=" + quoted(ZDENOISE_PLUGIN_DIR) + " "
+                        + host_program(oiiotool) + " " + path("shot.zdn") + " -o "
+                        + path("via_recipe.exr"),
                     path(".oiiotool"));
     ASSERT_EQ(r.status, 0) << r.out << r.err;
     EXPECT_EQ(max_rgb_difference(read_float(path("via_recipe.exr")),

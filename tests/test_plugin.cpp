@@ -26,7 +26,10 @@
 
 #include <zdenoise/version.h>
 
+#include "cli_harness.h"
+
 using namespace OIIO;
+using cli_harness::host_program;
 
 namespace {
 
@@ -113,14 +116,14 @@ protected:
 
     RunResult oiiotool(const std::string& args) const
     {
-        return run(quoted(kOiiotool) + " " + args);
+        return run(host_program(kOiiotool) + " " + args);
     }
 
     /// Run a Python script with Debian's python3 and its OpenImageIO module.
     RunResult python(const std::string& script) const
     {
         std::ofstream(path("script.py")) << "import OpenImageIO as oiio\n" << script;
-        return run(quoted(kPython) + " " + quoted(path("script.py")));
+        return run(host_program(kPython) + " " + quoted(path("script.py")));
     }
 
     void write_text(const std::string& name, const std::string& text) const
@@ -132,7 +135,7 @@ protected:
     /// idiff finds the two images identical (every channel, every pixel).
     void expect_identical(const std::string& a, const std::string& b) const
     {
-        RunResult r = run(quoted(kIdiff) + " " + quoted(a) + " " + quoted(b));
+        RunResult r = run(host_program(kIdiff) + " " + quoted(a) + " " + quoted(b));
         EXPECT_EQ(r.status, 0) << "idiff " << a << " " << b << ":\n" << r.out << r.err;
     }
 
@@ -215,7 +218,7 @@ TEST_F(PluginTest, KeepsEachChannelsPixelType)
                                + quoted(path("albedo.exr")) + " -o "
                                + quoted(path(name + "_cli.exr")));
         ASSERT_EQ(r.status, 0) << r.err;
-        r = run(quoted(kIinfo) + " " + quoted(path(name + ".zdn")));
+        r = run(host_program(kIinfo) + " " + quoted(path(name + ".zdn")));
         EXPECT_NE(r.out.find(name == "mixed" ? "half/half/half/half/float zdenoise" : "half zdenoise"),
                   std::string::npos)
             << r.out << r.err;
@@ -253,7 +256,7 @@ TEST_F(PluginTest, InputPathsAreRelativeToTheRecipesFolder)
     RunResult r = zdenoise("--in " + quoted(kSample) + " -o " + quoted(path("cli.exr")));
     ASSERT_EQ(r.status, 0) << r.err;
     // Run from another folder.
-    r = run("cd / && " + quoted(kOiiotool) + " " + quoted(path("recipes/shot.zdn")) + " -o "
+    r = run("cd / && " + host_program(kOiiotool) + " " + quoted(path("recipes/shot.zdn")) + " -o "
             + quoted(path("plugin.exr")));
     ASSERT_EQ(r.status, 0) << r.err;
     expect_identical(path("cli.exr"), path("plugin.exr"));
@@ -286,7 +289,7 @@ TEST_F(PluginTest, FileNameArgumentsOverrideTheRecipe)
 TEST_F(PluginTest, IinfoPrintsTheSpec)
 {
     write_text("shot.zdn", sample_recipe());
-    RunResult r = run(quoted(kIinfo) + " -v " + quoted(path("shot.zdn")));
+    RunResult r = run(host_program(kIinfo) + " -v " + quoted(path("shot.zdn")));
     ASSERT_EQ(r.status, 0) << r.err;
     for (const char* expected : { "96 x   96, 54 channel, float zdenoise",
                                   "ViewLayer.Combined.R", "ViewLayer.DiffCol.G",
