@@ -3,16 +3,18 @@
 # SECONDS (default 60) from its seeds in tests/fuzz/corpus. Inputs found on
 # the way go to a temporary folder, so the committed seeds stay as they
 # are; a crash leaves its input as crash-* in the current folder and fails
-# the run.
+# the run. Only the targets and what they link are built;
+# ZDENOISE_BUILD_JOBS parallel jobs (default 2).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-60}
 cmake -S . -B build-fuzz -DCMAKE_CXX_COMPILER=clang++ -DZDENOISE_FUZZ=ON \
       -DZDENOISE_BUILD_TESTS=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
-cmake --build build-fuzz -j2
+targets=(channel_spec denoise)
+cmake --build build-fuzz -j"${ZDENOISE_BUILD_JOBS:-2}" --target "${targets[@]/#/fuzz_}"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-for target in channel_spec denoise; do
+for target in "${targets[@]}"; do
     mkdir "$work/$target"
     if ! build-fuzz/bin/fuzz_$target -max_total_time="$seconds" -print_final_stats=1 \
             "$work/$target" tests/fuzz/corpus/$target >"$work/$target.log" 2>&1; then
