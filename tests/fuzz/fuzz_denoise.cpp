@@ -8,7 +8,7 @@
 // the RGB channels, other channels copied bit for bit, and a ROI giving
 // exactly the pixels of a whole-image run.
 //
-// Input: 6 bytes of shape and guide flags, 12 bytes of options, then one
+// Input: 6 bytes of shape and guide flags, 14 bytes of options, then one
 // byte per pixel value (cycled; see value()).
 
 #include <algorithm>
@@ -125,6 +125,8 @@ LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     opt.normal_cut      = bytes.option(0.25f) - 1.0f;
     opt.normal_power    = bytes.option(opt.normal_power);
     opt.quadrant_power  = bytes.option(opt.quadrant_power);
+    opt.centre_stride   = 1 + bytes.next() % 4;  // > r_min + 1: refused
+    opt.radius_growth   = bytes.option(opt.radius_growth);
 
     const int nchannels = 3 + shape % 3;  // RGB, + alpha, + an AOV
     ImageBuf radiance   = image(bytes, w, h, nchannels);
