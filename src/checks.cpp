@@ -55,6 +55,21 @@ check_input(ImageBuf& dst, const ImageBuf& img, const char* opname,
 
 
 bool
+check_frame(ImageBuf& dst, const char* opname, const ROI& roi,
+            const ROI& frame)
+{
+    if (roi.xbegin >= frame.xbegin && roi.xend <= frame.xend
+        && roi.ybegin >= frame.ybegin && roi.yend <= frame.yend)
+        return true;
+    dst.errorfmt("{}: the pixels being computed {}x{}{:+d}{:+d} are not all "
+                 "in the frame {}x{}{:+d}{:+d}",
+                 opname, roi.width(), roi.height(), roi.xbegin, roi.ybegin,
+                 frame.width(), frame.height(), frame.xbegin, frame.ybegin);
+    return false;
+}
+
+
+bool
 prepare_dst(ImageBuf& dst, const ImageBuf& src, ROI& roi, const char* opname)
 {
     if (!src.initialized()) {

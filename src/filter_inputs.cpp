@@ -93,7 +93,7 @@ decode_filter_inputs(FilterInputs& in, ImageBuf& dst, const ImageBuf& quotient,
 {
     const char* opname = "regression_filter";
     in.region          = region;
-    in.image           = quotient.roi();
+    in.image           = opt.frame;  // regression_filter() always sets it
     in.width           = region.width();
     in.height          = region.height();
     const size_t npix  = region.npixels();

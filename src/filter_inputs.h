@@ -46,7 +46,7 @@ no_normal(const float* n)
 /// The decoded filter input over `region` (row-major, `width` pixels a row).
 struct FilterInputs {
     ROI region;          ///< pixels held (within the image's data window)
-    ROI image;           ///< the image's whole data window
+    ROI image;           ///< the whole image (FilterOptions::frame)
     int width = 0, height = 0;
 
     std::vector<float> z;      ///< RGB quotient, 3 per pixel

@@ -35,6 +35,17 @@ albedo_demodulated(float albedo, float albedo_eps)
 /// shading, not light) would swamp every window around it.
 constexpr float kLargestFitQuotient = 1e18f;
 
+/// The pixels of `frame` the output pixels `roi` depend on: roi widened by
+/// `halo` (filter_halo()), clipped to the frame; x and y only.
+inline ROI
+halo_region(const ROI& roi, const ROI& frame, int halo)
+{
+    return OIIO::roi_intersection(ROI(roi.xbegin - halo, roi.xend + halo,
+                                      roi.ybegin - halo, roi.yend + halo),
+                                  ROI(frame.xbegin, frame.xend,
+                                      frame.ybegin, frame.yend));
+}
+
 /// Check that `img` is a usable input of operation `opname`: initialized,
 /// not deep, 2D, at least `minchannels` channels, and its data window holds
 /// `roi` (all but the channel range). On failure the message names the
@@ -42,6 +53,11 @@ constexpr float kLargestFitQuotient = 1e18f;
 bool
 check_input(ImageBuf& dst, const ImageBuf& img, const char* opname,
             const char* what, const ROI& roi, int minchannels);
+
+/// Check that the output pixels `roi` lie in `frame` (FilterOptions::frame).
+bool
+check_frame(ImageBuf& dst, const char* opname, const ROI& roi,
+            const ROI& frame);
 
 /// Make dst ready as the float result of an op whose first input is `src`
 /// and set roi (default: src's data window) to the pixels to compute.

@@ -137,6 +137,18 @@ layered_denoise(ImageBuf& dst, const std::vector<Layer>& layers,
         roi = image;
     roi.chbegin = 0;
     roi.chend   = 3;
+    // Every layer is filtered in the same frame: the first radiance's data
+    // window unless given; the images must then hold roi and its halo.
+    FilterOptions opt = options;
+    if (!opt.frame.defined())
+        opt.frame = image;
+    if (!detail::check_frame(dst, opname, roi, opt.frame))
+        return false;
+    ROI need = options.frame.defined()
+                   ? detail::halo_region(roi, opt.frame, filter_halo(opt))
+                   : image;
+    need.chbegin = 0;
+    need.chend   = 3;
     for (const Layer& layer : layers) {
         const std::string radiance = "layer '" + layer.name + "' radiance";
         const std::string albedo   = "layer '" + layer.name + "' albedo";
@@ -146,9 +158,9 @@ layered_denoise(ImageBuf& dst, const std::vector<Layer>& layers,
             return false;
         }
         if (!detail::check_input(dst, *layer.radiance, opname,
-                                 radiance.c_str(), image, 3)
+                                 radiance.c_str(), need, 3)
             || !detail::check_input(dst, *layer.albedo, opname,
-                                    albedo.c_str(), image, 3))
+                                    albedo.c_str(), need, 3))
             return false;
     }
     if (residual
@@ -174,7 +186,7 @@ layered_denoise(ImageBuf& dst, const std::vector<Layer>& layers,
         ImageBuf out;
         const ImageBuf* contribution = nullptr;
         FilterStats layer_stats;
-        if (!denoise_layer(dst, layer, guides, options, &layer_stats, roi,
+        if (!denoise_layer(dst, layer, guides, opt, &layer_stats, roi,
                            nthreads, out, contribution))
             return false;
         if (!ImageBufAlgo::add(dst, dst, *contribution, roi, nthreads))

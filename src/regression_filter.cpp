@@ -514,22 +514,16 @@ struct FilterTotals {
 };
 
 /// Filter the output pixels `roi` (docs/FILTER.md sections 2-7), reading
-/// the inputs over roi plus the halo everything depends on.
+/// the inputs over roi plus the halo everything depends on. `opt.frame` is
+/// the image's data window.
 bool
 filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
             const Guides& guides, const FilterOptions& opt, ROI roi,
             int nthreads, FilterTotals& totals)
 {
     const char* opname = "regression_filter";
-    const ROI image    = quotient.roi();
-    // Everything an output pixel depends on lies within 2*r_max (centres up
-    // to r_max away, their windows r_max further) plus the noise estimate's
-    // footprint (3x3 residual, 5x5 median, 3x3 smoothing) of 4.
-    const int halo = 2 * opt.r_max + 4;
-    ROI region(roi.xbegin - halo, roi.xend + halo, roi.ybegin - halo,
-               roi.yend + halo);
-    region = roi_intersection(region, ROI(image.xbegin, image.xend,
-                                          image.ybegin, image.yend));
+    const ROI image    = opt.frame;
+    const ROI region   = halo_region(roi, image, filter_halo(opt));
 
     FilterInputs in;
     if (!decode_filter_inputs(in, dst, quotient, albedo, guides, opt, region,
@@ -664,6 +658,16 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
 }  // namespace
 
 
+int
+filter_halo(const FilterOptions& options)
+{
+    // Everything an output pixel depends on lies within 2*r_max (centres up
+    // to r_max away, their windows r_max further) plus the noise estimate's
+    // footprint (3x3 residual, 5x5 median, 3x3 smoothing) of 4.
+    return 2 * std::max(options.r_max, 0) + 4;
+}
+
+
 bool
 regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                   const ImageBuf& albedo, const Guides& guides,
@@ -673,8 +677,20 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     const char* opname = "regression_filter";
     if (!prepare_dst(dst, quotient, roi, opname)
         || !check_input(dst, quotient, opname, "quotient", roi, 3)
-        || !check_input(dst, albedo, opname, "albedo", quotient.roi(), 3)
         || !check_options(dst, options))
+        return false;
+    // The inputs must hold what the output depends on: with the frame given,
+    // roi and its halo; else their data windows are the frame.
+    FilterOptions tile_opt = options;
+    if (!tile_opt.frame.defined())
+        tile_opt.frame = quotient.roi();
+    if (!check_frame(dst, opname, roi, tile_opt.frame))
+        return false;
+    const ROI need = options.frame.defined()
+                         ? halo_region(roi, options.frame, filter_halo(options))
+                         : quotient.roi();
+    if (!check_input(dst, quotient, opname, "quotient", need, 3)
+        || !check_input(dst, albedo, opname, "albedo", need, 3))
         return false;
     struct NamedGuide {
         const ImageBuf* buf;
@@ -688,7 +704,7 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                   { guides.half_b, "half buffer B", 3 } };
     for (const NamedGuide& g : named)
         if (g.buf
-            && !check_input(dst, *g.buf, opname, g.name, quotient.roi(),
+            && !check_input(dst, *g.buf, opname, g.name, need,
                             g.minchannels))
             return false;
     if (!guides.variance && (!guides.half_a != !guides.half_b)) {
@@ -704,7 +720,6 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     const int nty = (roi.height() + kTile - 1) / kTile;
     const int ntiles = ntx * nty;
     FilterTotals totals;
-    FilterOptions tile_opt = options;
     for (int t = 0; t < ntiles; ++t) {
         ROI tile(roi.xbegin + (t % ntx) * kTile, 0, roi.ybegin + (t / ntx) * kTile, 0,
                  roi.zbegin, roi.zend, roi.chbegin, roi.chend);

@@ -3,12 +3,17 @@
 //
 // Frames wider or taller than the filter's internal tile (1024 pixels) are
 // processed tile by tile in bounded memory; the result must be exactly the
-// one of untiled runs over parts of the frame.
+// one of untiled runs over parts of the frame. So must a run over a strip
+// of rows that holds only the rows it needs (filter_halo() around them) and
+// names the whole frame (FilterOptions::frame), as the job streams frames.
 
+#include <algorithm>
 #include <cstring>
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include <OpenImageIO/imagebufalgo.h>
 
 #include <zdenoise/zdenoise.h>
 
@@ -46,4 +51,132 @@ TEST(FilterTiles, TiledFrameEqualsUntiledParts)
     }
     EXPECT_EQ(windows, whole_stats.windows) << "every centre counted once";
     EXPECT_EQ(whole_stats.pixels, 1100 * 24);
+}
+
+
+namespace {
+
+/// `img` cut to the rows [y0, y1) (coordinates kept).
+ImageBuf
+rows(const ImageBuf& img, int y0, int y1)
+{
+    ROI r   = img.roi();
+    r.ybegin = y0;
+    r.yend   = y1;
+    ImageBuf out;
+    EXPECT_TRUE(OIIO::ImageBufAlgo::crop(out, img, r)) << out.geterror();
+    return out;
+}
+
+void
+expect_same_rows(const ImageBuf& whole, const ImageBuf& piece, int y0, int y1)
+{
+    for (int y = y0; y < y1; ++y)
+        for (int x = whole.xbegin(); x < whole.xend(); ++x)
+            for (int c = 0; c < 3; ++c) {
+                const float a = whole.getchannel(x, y, 0, c);
+                const float b = piece.getchannel(x, y, 0, c);
+                ASSERT_EQ(std::memcmp(&a, &b, sizeof(float)), 0)
+                    << "pixel " << x << "," << y << " channel " << c;
+            }
+}
+
+}  // namespace
+
+
+TEST(FilterTiles, StripsGivenTheFrameEqualTheWholeFrame)
+{
+    // Each strip sees only its rows and the halo around them, as a
+    // streaming reader holds them; with FilterOptions::frame the result is
+    // the whole-frame one, with all guides and strided centres too.
+    synth::Scene s = synth::two_objects_cryptomatte(40, 90, { 4, 7 });
+    const ImageBuf noisy = synth::shifted(s.noisy, 3, -5);
+    const ImageBuf albedo = synth::shifted(s.albedo, 3, -5);
+    const ImageBuf normal = synth::shifted(s.normal, 3, -5);
+    const ImageBuf depth = synth::shifted(s.depth, 3, -5);
+    const ImageBuf ids = synth::shifted(s.object_id, 3, -5);
+    for (int stride : { 1, 3 }) {
+        zdenoise::FilterOptions opt;
+        opt.r_max         = 6;
+        opt.centre_stride = stride;
+        zdenoise::Guides g;
+        g.normal    = &normal;
+        g.depth     = &depth;
+        g.object_id = &ids;
+        zdenoise::FilterStats whole_stats;
+        ImageBuf whole = zdenoise::denoise(noisy, albedo, g, opt, &whole_stats);
+        ASSERT_FALSE(whole.has_error()) << whole.geterror();
+
+        const int halo = zdenoise::filter_halo(opt);
+        EXPECT_EQ(halo, 2 * opt.r_max + 4);
+        opt.frame = noisy.roi();
+        int64_t windows = 0;
+        const ROI f = noisy.roi();
+        for (int y0 = f.ybegin; y0 < f.yend; y0 += 17) {
+            const int y1 = std::min(y0 + 17, f.yend);
+            const int a = std::max(y0 - halo, f.ybegin);
+            const int b = std::min(y1 + halo, f.yend);
+            ImageBuf n = rows(noisy, a, b), al = rows(albedo, a, b),
+                     nn = rows(normal, a, b), d = rows(depth, a, b),
+                     id = rows(ids, a, b);
+            zdenoise::Guides sg;
+            sg.normal    = &nn;
+            sg.depth     = &d;
+            sg.object_id = &id;
+            ROI roi   = f;
+            roi.ybegin = y0;
+            roi.yend   = y1;
+            zdenoise::FilterStats st;
+            ImageBuf piece = zdenoise::denoise(n, al, sg, opt, &st, roi);
+            ASSERT_FALSE(piece.has_error()) << piece.geterror();
+            windows += st.windows;
+            expect_same_rows(whole, piece, y0, y1);
+
+            // One row fewer than the halo is refused, naming the input.
+            if (a > f.ybegin) {
+                ImageBuf short_albedo = rows(albedo, a + 1, b);
+                ImageBuf bad = zdenoise::denoise(n, short_albedo, sg, opt,
+                                                 nullptr, roi);
+                EXPECT_TRUE(bad.has_error());
+                EXPECT_NE(bad.geterror().find("albedo"), std::string::npos)
+                    << bad.geterror();
+            }
+        }
+        EXPECT_EQ(windows, whole_stats.windows) << "stride " << stride;
+    }
+}
+
+
+TEST(FilterTiles, LayeredStripsGivenTheFrameEqualTheWholeFrame)
+{
+    synth::Scene s = synth::staircase(36, 70, 8, { 4, 11 });
+    zdenoise::Layer layer;
+    layer.name     = "diffuse";
+    layer.radiance = &s.noisy;
+    layer.albedo   = &s.albedo;
+    zdenoise::Guides g;
+    g.depth = &s.depth;
+    zdenoise::FilterOptions opt;
+    opt.r_max      = 5;
+    ImageBuf whole = zdenoise::layered_denoise({ layer }, &s.albedo, g, opt);
+    ASSERT_FALSE(whole.has_error()) << whole.geterror();
+
+    const int halo = zdenoise::filter_halo(opt);
+    opt.frame      = s.noisy.roi();
+    for (int y0 = 0; y0 < 70; y0 += 25) {
+        const int y1 = std::min(y0 + 25, 70);
+        const int a = std::max(y0 - halo, 0), b = std::min(y1 + halo, 70);
+        ImageBuf n = rows(s.noisy, a, b), al = rows(s.albedo, a, b),
+                 d = rows(s.depth, a, b), res = rows(s.albedo, y0, y1);
+        zdenoise::Layer l = layer;
+        l.radiance        = &n;
+        l.albedo          = &al;
+        zdenoise::Guides sg;
+        sg.depth = &d;
+        ImageBuf piece = zdenoise::layered_denoise({ l }, &res, sg, opt,
+                                                   nullptr,
+                                                   ROI(0, 36, y0, y1));
+        ASSERT_FALSE(piece.has_error()) << piece.geterror();
+        expect_same_rows(whole, piece, y0, y1);
+    }
 }

@@ -94,6 +94,18 @@ struct FilterOptions {
     /// parameter: it never changes the result.
     std::function<void(float)> progress;
 
+    /// The data window of the whole image, when the images given to an
+    /// operation hold only a part of it: for example a horizontal strip of
+    /// rows, read with filter_halo() rows above and below the rows to
+    /// compute (`roi`). Windows clip at the frame's edges, not at the
+    /// images', and the filter's processing order is anchored at the
+    /// frame's origin, so the result in roi is bit-identical to that of a
+    /// run on the whole image. The images must cover roi widened by
+    /// filter_halo() and clipped to the frame. Undefined (the default): the
+    /// first input's data window is the frame. Not a filter parameter: it
+    /// never changes the result.
+    ROI frame;
+
     /// The defaults of ALGORITHM.md section 8 (edge_k 3, value_k 2,
     /// sigma_good 1, radius_growth 1), before tuning on data.
     static FilterOptions algorithm_defaults()
@@ -289,6 +301,15 @@ ZDENOISE_API ImageBuf layered_denoise(const std::vector<Layer>& layers,
                                       const FilterOptions& options = {},
                                       FilterStats* stats = nullptr,
                                       ROI roi = {}, int nthreads = 0);
+
+/// How far an output pixel of regression_filter(), denoise() and
+/// layered_denoise() looks with these options: it depends only on input
+/// pixels at most this many columns and rows away (centres up to r_max
+/// away, whose windows reach r_max further, plus the 4-pixel footprint of
+/// the noise estimate, docs/FILTER.md section 8). To compute a part of an
+/// image exactly, give the inputs over that part widened by the halo and
+/// clipped to the image, and say which image it is (FilterOptions::frame).
+ZDENOISE_API int filter_halo(const FilterOptions& options);
 
 /// "name=value ..." of every filter parameter, as recorded in output
 /// metadata and printed by `zdenoise -v`.
