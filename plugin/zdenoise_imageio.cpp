@@ -5,7 +5,9 @@
 // share/zdn-format.md) as the image `zdenoise` would write for it. open()
 // runs the job once; the scanlines are then served from memory in the
 // output's per-channel pixel types, so that a program writing what it
-// reads writes the same file `zdenoise` does.
+// reads writes the same file `zdenoise` does. The job streams its inputs
+// strip by strip (src/job/job.h), but a reader must hold the whole output:
+// memory follows the frame here, in the output's own pixel types.
 //
 // The format is named "zdenoise". OIIO's writers drop metadata whose
 // prefix before ':' is the name of another format, which is why zdenoise's
@@ -39,6 +41,45 @@ thread_local int recipes_being_read = 0;
 struct ReadingRecipe {
     ReadingRecipe() { ++recipes_being_read; }
     ~ReadingRecipe() { --recipes_being_read; }
+};
+
+
+/// The job's output as the file zdenoise would write for it, read back:
+/// scanlines, each channel in the pixel type it is written in. As OIIO's
+/// readers do, `format` is the widest channel type, and per-channel types
+/// are listed only when they differ.
+class NativeImage final : public job::OutputSink {
+public:
+    ImageSpec spec;
+    std::vector<unsigned char> pixels;
+
+    bool begin(const ImageSpec& image_spec,
+               const std::vector<TypeDesc>& formats,
+               std::string& error) override
+    {
+        spec        = image_spec;
+        spec.format = *std::max_element(
+            formats.begin(), formats.end(),
+            [](TypeDesc a, TypeDesc b) { return a.size() < b.size(); });
+        spec.channelformats = formats;
+        if (std::all_of(formats.begin(), formats.end(),
+                        [&](TypeDesc t) { return t == spec.format; }))
+            spec.channelformats.clear();
+        spec.tile_width = spec.tile_height = spec.tile_depth = 0;
+        pixels.resize(spec.image_bytes(true));
+        return true;
+    }
+
+    bool holds_image() const override { return true; }
+
+    bool rows(int ybegin, int yend, const void* data,
+              std::string& error) override
+    {
+        const size_t row = spec.scanline_bytes(true);
+        std::memcpy(pixels.data() + size_t(ybegin - spec.y) * row, data,
+                    size_t(yend - ybegin) * row);
+        return true;
+    }
 };
 
 
@@ -140,50 +181,14 @@ ZdnInput::open_recipe(const std::string& name, ImageSpec& newspec)
     if (recipe.threads == 0)
         recipe.threads = threads();
 
+    NativeImage image;
     job::JobResult result;
-    if (!job::run_job(recipe, result, error)) {
+    if (!job::run_job(recipe, image, result, error)) {
         errorfmt("recipe '{}': {}", name, error);
         return false;
     }
-
-    // The spec of the file zdenoise would write: run_job's image with the
-    // pixel types it is written in, as scanlines. As OIIO's readers do,
-    // `format` is the widest channel type, and per-channel types are listed
-    // only when they differ.
-    const ImageBuf& image  = result.image;
-    ImageSpec spec         = image.spec();
-    const auto& formats    = result.channel_formats;
-    spec.format            = *std::max_element(
-        formats.begin(), formats.end(),
-        [](TypeDesc a, TypeDesc b) { return a.size() < b.size(); });
-    spec.channelformats = formats;
-    if (std::all_of(formats.begin(), formats.end(),
-                    [&](TypeDesc t) { return t == spec.format; }))
-        spec.channelformats.clear();
-    spec.tile_width = spec.tile_height = spec.tile_depth = 0;
-
-    // Convert each channel once to its pixel type, interleaved as OIIO's
-    // native scanlines are.
-    const stride_t pixel_bytes    = stride_t(spec.pixel_bytes(true));
-    const stride_t scanline_bytes = stride_t(spec.scanline_bytes(true));
-    std::vector<unsigned char> pixels(spec.image_bytes(true));
-    const ROI all = image.roi();
-    stride_t offset = 0;
-    for (int c = 0; c < spec.nchannels; ++c) {
-        const TypeDesc type = spec.channelformat(c);
-        ROI channel         = all;
-        channel.chbegin     = c;
-        channel.chend       = c + 1;
-        if (!image.get_pixels(channel, type, pixels.data() + offset,
-                              pixel_bytes, scanline_bytes)) {
-            errorfmt("recipe '{}': {}", name,
-                     job::one_line(image.geterror()));
-            return false;
-        }
-        offset += stride_t(type.size());
-    }
-    m_spec   = spec;
-    m_pixels = std::move(pixels);
+    m_spec   = image.spec;
+    m_pixels = std::move(image.pixels);
     newspec  = m_spec;
     return true;
 }

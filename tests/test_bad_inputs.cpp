@@ -270,20 +270,37 @@ TEST_F(BadInputTest, MissingOrMisnamedChannelsAreRefused)
 TEST_F(BadInputTest, FrameTooLargeForMemoryIsRefusedBeforeReading)
 {
     // A header declaring 100000 x 100000 pixels (a corrupt or absurd
-    // render): reading it would need ~150 GB. The file itself holds no
-    // tiles.
-    {
+    // render): the files hold no pixels. The frame streams in strips, but
+    // even a strip of this width needs more than a small limit.
+    auto empty_file = [&](const std::string& name, bool tiled) {
         ImageSpec spec(100000, 100000, 4, TypeHalf);
-        spec.tile_width = spec.tile_height = 4096;
+        if (tiled)
+            spec.tile_width = spec.tile_height = 4096;
         spec.attribute("compression", "zip");
-        auto out = ImageOutput::create(path("huge.exr"));
-        ASSERT_TRUE(out && out->open(path("huge.exr"), spec)) << OIIO::geterror();
+        auto out = ImageOutput::create(path(name));
+        ASSERT_TRUE(out && out->open(path(name), spec)) << OIIO::geterror();
         out->close();
-    }
-    ASSERT_LT(Filesystem::file_size(path("huge.exr")), 100000u);
-    write_image("albedo.exr", 64, 64, { "R", "G", "B" }, 0.5f);
-    expect_refused(make_job(path("huge.exr"), path("albedo.exr")),
-                   { "huge.exr", "100000x100000", "memory limit" });
+        ASSERT_LT(Filesystem::file_size(path(name)), 100000u);
+    };
+    empty_file("huge.exr", true);
+    job::Job huge = make_job(path("huge.exr"), path("huge.exr"));
+    huge.mem_limit = uint64_t(1) << 30;
+    expect_refused(huge, { "huge.exr", "100000x100000", "memory limit", "strips of" });
+
+    // With room for a strip, the frame's size is no reason to refuse it: it
+    // streams (and this one fails at its first missing pixels). The job
+    // keeping its output in memory (run_job) is still refused.
+    empty_file("huge_scanlines.exr", false);
+    huge = make_job(path("huge_scanlines.exr"), path("huge_scanlines.exr"));
+    huge.mem_limit = uint64_t(64) << 30;
+    RunResult streamed = run(cli_args(huge, path("out.exr")));
+    expect_one_line_error(streamed, "cannot read '" + path("huge_scanlines.exr") + "'");
+    EXPECT_EQ(streamed.err.find("memory limit"), std::string::npos) << streamed.err;
+    EXPECT_EQ(files(), (std::vector<std::string> { "huge.exr", "huge_scanlines.exr" }));
+    job::JobResult in_memory;
+    std::string error;
+    EXPECT_FALSE(job::run_job(huge, in_memory, error));
+    EXPECT_NE(error.find("memory limit"), std::string::npos) << error;
 
     // Any frame, with a limit too low for it.
     job::Job j   = small_job();
@@ -310,8 +327,9 @@ TEST_F(BadInputTest, MemoryGuardCountsTheLayers)
             channels.push_back(std::string(layer) + c);
     write_image("aovs.exr", 256, 256, channels, 0.5f);
     auto needed_mib = [&](const std::string& mode) {
+        // The whole frame as one strip (--tile 256): its layers' share.
         RunResult r = run("--in " + path("aovs.exr") + " --mode " + mode
-                          + " --mem-limit 1M -o " + path("out.exr"));
+                          + " --tile 256 --mem-limit 1M -o " + path("out.exr"));
         expect_one_line_error(r, "memory limit");
         const size_t at = r.err.find("needs about ");
         EXPECT_NE(at, std::string::npos) << r.err;

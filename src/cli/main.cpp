@@ -150,6 +150,12 @@ General:
   --mem-limit SIZE     Refuse a frame needing more memory than SIZE (bytes,
                        or with a K, M, G or T suffix), before reading its
                        pixels. Default: half the machine's memory.
+  --tile N             Read, denoise and write the frame in strips of N
+                       rows (each read with the filter's halo of
+                       2*rmax+4 rows around it): memory follows N, not the
+                       frame. Default: automatic, the whole frame when it is
+                       small, else strips that fit the memory. Results do
+                       not depend on it.
   --threads N          Threads (default: all cores); results do not depend
                        on it.
   -v                   Verbose: inputs, parameters, progress, timings,
@@ -254,7 +260,8 @@ parse_args(int argc, char* argv[])
             { "--ocolorspace", &a.job.colour.output_space },
             { "--working-colorspace", &a.job.colour.working_space } };
     std::map<std::string, float*> floats;
-    std::map<std::string, int*> ints = { { "--threads", &a.job.threads } };
+    std::map<std::string, int*> ints = { { "--threads", &a.job.threads },
+                                         { "--tile", &a.job.tile_rows } };
     for (const job::FilterOptionName& o : job::filter_option_names()) {
         if (o.real)
             floats[std::string("--") + o.name] = &(a.job.filter.*o.real);
@@ -371,6 +378,11 @@ parse_args(int argc, char* argv[])
     if (a.job.threads < 0)
         fail(format("--threads needs a number >= 0, got {}", a.job.threads),
              kExitUsage);
+    if (a.job.tile_rows < 0)
+        fail(format("--tile needs a number of rows >= 1 (or 0: automatic), "
+                    "got {}",
+                    a.job.tile_rows),
+             kExitUsage);
     return a;
 }
 
@@ -452,18 +464,14 @@ run(int argc, char* argv[])
             }
         };
     }
+    // Read, denoised and written strip by strip (job.h).
     job::JobResult result;
-    const bool ok = job::run_job(a.job, result, err);
+    const bool ok = job::run_job_to_file(a.job, a.output, result, err);
     if (a.verbose)
         for (const std::string& line : result.log)
             printf("zdenoise: %s\n", line.c_str());
     if (!ok)
         fail(err);
-
-    Timer write_timer;
-    if (!job::write_atomically(result.image, a.output, err))
-        fail(err);
-    const double write_time = write_timer();
 
     if (a.verbose) {
         const FilterStats& stats = result.stats;
@@ -481,8 +489,8 @@ run(int argc, char* argv[])
                (long long)stats.nonfinite_pixels);
         printf("zdenoise: read %.2fs, denoise %.2fs, write %.2fs, total "
                "%.2fs -> '%s'\n",
-               result.read_seconds, result.denoise_seconds, write_time,
-               total(), a.output.c_str());
+               result.read_seconds, result.denoise_seconds,
+               result.write_seconds, total(), a.output.c_str());
     }
     return 0;
 }

@@ -127,7 +127,7 @@ run_frame(const job::Job& job, FrameRecord& r, const SequenceOptions& o)
                                      r.output));
     job::JobResult result;
     std::string err;
-    const bool ok = job::run_job(job, result, err);
+    const bool ok = job::run_job_to_file(job, r.output, result, err);
     if (o.verbose)
         for (const std::string& line : result.log)
             printf("zdenoise: %s\n", line.c_str());
@@ -135,12 +135,9 @@ run_frame(const job::Job& job, FrameRecord& r, const SequenceOptions& o)
         return failed(err);
     r.read_seconds    = result.read_seconds;
     r.denoise_seconds = result.denoise_seconds;
+    r.write_seconds   = result.write_seconds;
     r.stats           = result.stats;
-    Timer write_timer;
-    if (!job::write_atomically(result.image, r.output, err))
-        return failed(err);
-    r.write_seconds = write_timer();
-    r.seconds       = wall();
+    r.seconds         = wall();
 }
 
 

@@ -6,19 +6,23 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <memory>
-#include <set>
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imagebufalgo_util.h>
+#include <OpenImageIO/imagecache.h>
+#include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
+#include "atomic_write.h"
 #include "channel_spec.h"
 #include "layer_conventions.h"
+#include "row_reader.h"
 
 namespace zdenoise {
 namespace job {
@@ -38,6 +42,11 @@ fail(const std::string& message)
 {
     throw Failure { message };
 }
+
+/// Thrown when the OutputSink fails: its message is reported as it is.
+struct SinkFailure {
+    std::string message;
+};
 
 
 /// Do two data windows cover the same pixels?
@@ -86,26 +95,41 @@ part_channel_names(const ImageSpec& part)
 
 
 /// An input file's headers, checked: part 0's, and the channel names of
-/// all its parts (as InputFile has them).
+
+/// An input file's headers, checked: each part's spec (as an ImageBuf
+/// reading it holds it, and as the file has it), and the channel names of
+/// all its parts in one list (part k > 0 as part_channel_names() names
+/// them).
 struct InputHeader {
-    ImageSpec spec;
+    /// Part 0, header only (the colour guess reads it). Held, never
+    /// copied: copying an ImageBuf reads its pixels.
+    std::shared_ptr<const ImageBuf> first;
+    ImageSpec spec;                 ///< part 0's
+    std::vector<ImageSpec> specs;   ///< every part's
+    std::vector<ImageSpec> native;  ///< every part's, in the file's types
     std::vector<std::string> channelnames;
     int parts = 1;
+
+    ROI window() const
+    {
+        return ROI(spec.x, spec.x + spec.width, spec.y, spec.y + spec.height);
+    }
+    /// Channel c's pixel type in the file.
+    TypeDesc format(int c) const
+    {
+        for (const ImageSpec& s : native) {
+            if (c < s.nchannels)
+                return s.channelformat(c);
+            c -= s.nchannels;
+        }
+        return TypeUnknown;
+    }
 };
 
-/// One input file: the channels of all its parts (a multipart EXR's part
-/// k > 0 contributes its channels as part_channel_names() names them), as
-/// float, with each channel's pixel type in the file.
-struct InputFile {
-    ImageBuf image;
-    std::vector<TypeDesc> formats;
-};
 
-
-/// Input files, each read once however many roles it serves. Headers are
-/// read first (header()), so that a bad file or a frame too large for
-/// memory is refused before any pixel is allocated; pixels on first use
-/// (get()).
+/// Input files, each opened once however many roles it serves. Headers
+/// are read first (header()), so that a bad file or a frame too large for
+/// memory is refused before any pixel is read.
 class InputFiles {
 public:
     const InputHeader& header(const std::string& path)
@@ -117,47 +141,72 @@ public:
             fail(format("cannot read '{}': no such file", path));
         if (Filesystem::file_size(path) == 0)
             fail(format("cannot read '{}': the file is empty", path));
-        const ImageBuf first = checked_part(path, 0);
+        auto first = std::make_shared<const ImageBuf>(checked_part(path, 0));
         // OIIO falls back to reading by content; a file whose contents
         // contradict its name was most likely written wrongly upstream.
         const std::string named = format_of_extension(path);
-        const std::string found = std::string(first.file_format_name());
+        const std::string found = std::string(first->file_format_name());
         if (!named.empty() && named != found)
             fail(format("cannot read '{}': it is a {} file, not {} as its "
                         "name says",
                         path, found, named));
         InputHeader h;
-        h.spec         = first.spec();
+        h.first        = first;
+        h.spec         = first->spec();
         h.channelnames = h.spec.channelnames;
-        h.parts        = first.nsubimages();
+        h.parts        = first->nsubimages();
+        h.specs.push_back(first->spec());
+        h.native.push_back(first->nativespec());
         for (int part = 1; part < h.parts; ++part) {
             const ImageBuf buf = checked_part(path, part);
-            if (!same_pixels(first.roi(), buf.roi()))
+            if (!same_pixels(first->roi(), buf.roi()))
                 fail(format("'{}': part {} ('{}') is {}, part 0 is {}: "
                             "zdenoise needs every part to cover the same "
                             "pixels",
                             path, part, buf.spec().get_string_attribute("name"),
-                            window_text(buf.roi()), window_text(first.roi())));
+                            window_text(buf.roi()), window_text(first->roi())));
             for (const std::string& c : part_channel_names(buf.spec()))
                 h.channelnames.push_back(c);
+            h.specs.push_back(buf.spec());
+            h.native.push_back(buf.nativespec());
         }
+        // The pixels are read by a RowReader: OIIO's ImageCache need not
+        // keep the file open (an OpenEXR reader holds its line buffers,
+        // tens of MB for a render with many passes). Its entry stays.
+        ImageCache::create(true)->close(ustring(path));
         return m_headers[path] = std::move(h);
     }
 
-    InputFile& get(const std::string& path)
+    /// The file's rows (rows() needs want() first for every channel used).
+    RowReader& rows(const std::string& path)
     {
-        auto it = m_files.find(path);
-        if (it != m_files.end())
-            return *it->second;
-        const int parts = header(path).parts;
-        auto file = std::make_unique<InputFile>();
-        file->image = read_part(path, 0, file->formats);
-        for (int part = 1; part < parts; ++part)
-            append_part(*file, path, part);
-        return *(m_files[path] = std::move(file));
+        auto it = m_rows.find(path);
+        if (it == m_rows.end()) {
+            const InputHeader& h = header(path);
+            it = m_rows.emplace(path, std::make_unique<RowReader>(
+                                          path, h.native, m_wanted[path]))
+                     .first;
+        }
+        return *it->second;
     }
 
-    ImageBuf& image(const std::string& path) { return get(path).image; }
+    /// Channels `indices` of `path` will be read.
+    void want(const std::string& path, const std::vector<int>& indices)
+    {
+        std::vector<bool>& w = m_wanted[path];
+        w.resize(header(path).channelnames.size(), false);
+        for (int c : indices)
+            w[size_t(c)] = true;
+    }
+
+    /// Every file with wanted channels.
+    std::vector<std::string> paths() const
+    {
+        std::vector<std::string> p;
+        for (const auto& w : m_wanted)
+            p.push_back(w.first);
+        return p;
+    }
 
 private:
     /// Part `part`'s header; a deep part or one without pixels is refused.
@@ -178,101 +227,169 @@ private:
         return buf;
     }
 
-    static ImageBuf read_part(const std::string& path, int part,
-                              std::vector<TypeDesc>& formats)
-    {
-        ImageBuf buf(path, part);
-        if (!buf.read(part, 0, true, TypeFloat))
-            fail(format("cannot read '{}': {}", path,
-                        one_line(buf.geterror())));
-        const ImageSpec& native = buf.nativespec();
-        formats.resize(size_t(native.nchannels), native.format);
-        for (size_t c = 0; c < native.channelformats.size(); ++c)
-            formats[c] = native.channelformats[c];
-        return buf;
-    }
-
-    static void append_part(InputFile& file, const std::string& path,
-                            int part)
-    {
-        std::vector<TypeDesc> formats;
-        ImageBuf buf = read_part(path, part, formats);
-        const ImageSpec& spec = buf.spec();
-        std::vector<std::string> names = file.image.spec().channelnames;
-        for (const std::string& c : part_channel_names(spec))
-            names.push_back(c);
-        ImageSpec merged_spec = file.image.spec();
-        for (const ParamValue& p : spec.extra_attribs)
-            if (!merged_spec.find_attribute(p.name()))
-                merged_spec.extra_attribs.push_back(p);
-        ImageBuf merged;
-        if (!ImageBufAlgo::channel_append(merged, file.image, buf))
-            fail(format("cannot read '{}': {}", path,
-                        one_line(merged.geterror())));
-        merged_spec.nchannels    = merged.spec().nchannels;
-        merged_spec.channelnames = names;
-        merged_spec.alpha_channel = file.image.spec().alpha_channel;
-        merged_spec.z_channel     = file.image.spec().z_channel;
-        merged_spec.erase_attribute("name");
-        merged_spec.erase_attribute("oiio:subimagename");
-        merged_spec.erase_attribute("oiio:subimages");
-        merged.specmod() = merged_spec;
-        file.image = std::move(merged);
-        file.formats.insert(file.formats.end(), formats.begin(),
-                            formats.end());
-    }
-
     std::map<std::string, InputHeader> m_headers;
-    std::map<std::string, std::unique_ptr<InputFile>> m_files;
+    std::map<std::string, std::vector<bool>> m_wanted;
+    std::map<std::string, std::unique_ptr<RowReader>> m_rows;
 };
 
 
-struct RoleImage {
-    ImageBuf image;            ///< the selected channels, float
-    std::vector<int> indices;  ///< their indices in the file
+/// The channels of one role (the radiance, the albedo, a guide, one term
+/// of a layer's sum), chosen from a file's header.
+struct Selection {
+    std::string path;
+    std::vector<int> indices;        ///< in the file's channel list
+    std::vector<std::string> names;  ///< the role image's channel names
 };
 
-/// Extract the channels of `arg` for `role`, checking they exist and that
-/// the file covers the noisy input's pixels.
-RoleImage
-load_role(InputFiles& files, const InputArg& arg, Role role,
-          const ImageBuf* reference, const std::string& reference_path)
+/// Choose the channels of `arg` for `role`, checking they exist and that
+/// the file covers the noisy input's pixels (`noisy`, from
+/// `reference_path`; none for the noisy input itself). A file covering more
+/// pixels than the noisy input (a guide rendered without the beauty's crop)
+/// is cut to them; one covering fewer cannot be used.
+Selection
+select_role(InputFiles& files, const InputArg& arg, Role role,
+            const ROI* noisy, const std::string& reference_path)
 {
-    RoleImage r;
-    ImageBuf& src = files.image(arg.path);
+    Selection s;
+    s.path                 = arg.path;
+    const InputHeader& h   = files.header(arg.path);
     std::string err;
-    if (!select_channels(src.spec().channelnames, arg.channels, role,
-                              r.indices, err))
+    if (!select_channels(h.channelnames, arg.channels, role, s.indices, err))
         fail(format("{} '{}': {}", role_name(role), arg.path, err));
-    // A file covering more pixels than the noisy input (a guide rendered
-    // without the beauty's crop) is cut to them; one covering fewer cannot
-    // be used.
-    const ROI a = src.roi();
-    const ROI b = reference ? reference->roi() : a;
-    const ROI have(a.xbegin, a.xend, a.ybegin, a.yend);
-    const ROI need(b.xbegin, b.xend, b.ybegin, b.yend);
-    if (roi_intersection(have, need) != need)
+    const ROI have = h.window();
+    if (noisy && roi_intersection(have, *noisy) != *noisy)
         fail(format("{} '{}' is {}, but the noisy input '{}' is {}: it must "
                     "cover the same pixels",
-                    role_name(role), arg.path, window_text(a), reference_path,
-                    window_text(b)));
-    std::vector<std::string> names;
+                    role_name(role), arg.path, window_text(have),
+                    reference_path, window_text(*noisy)));
+    // Radiance channels are called R,G,B,A (A marks the filter's "no
+    // surface"); the others keep the file's names.
     if (role == Role::Radiance || role == Role::LayerRadiance)
-        names = { "R", "G", "B", "A" };
-    names.resize(r.indices.size());
-    if (!ImageBufAlgo::channels(r.image, src, int(r.indices.size()),
-                                r.indices, {}, names))
-        fail(format("{} '{}': {}", role_name(role), arg.path,
-                    one_line(r.image.geterror())));
-    if (have != need) {
-        ImageBuf cropped;
-        if (!ImageBufAlgo::crop(cropped, r.image, need))
-            fail(format("{} '{}': {}", role_name(role), arg.path,
-                        one_line(cropped.geterror())));
-        r.image = std::move(cropped);
-    }
-    return r;
+        s.names = { "R", "G", "B", "A" };
+    s.names.resize(s.indices.size());
+    for (size_t k = 0; k < s.indices.size(); ++k)
+        if (s.names[k].empty())
+            s.names[k] = h.channelnames[size_t(s.indices[k])];
+    files.want(arg.path, s.indices);
+    return s;
 }
+
+
+/// Move `n` consecutive channels of one pixel type from one interleaved
+/// row to another, converting to `to` (OIIO's conversions, as a read or
+/// write converting them would).
+void
+move_channels(const unsigned char* src, TypeDesc from, stride_t src_stride,
+              unsigned char* dst, TypeDesc to, stride_t dst_stride, int n,
+              int width)
+{
+    if (from == to) {
+        const size_t bytes = size_t(n) * from.size();
+        for (int x = 0; x < width; ++x)
+            std::memcpy(dst + x * dst_stride, src + x * src_stride, bytes);
+        return;
+    }
+    convert_image(n, width, 1, 1, src, from, src_stride, AutoStride,
+                  AutoStride, dst, to, dst_stride, AutoStride, AutoStride);
+}
+
+/// Runs of the file channels `indices` that lie next to each other in the
+/// file with one pixel type: each moves in one call.
+struct ChannelRun {
+    int first = 0;  ///< position in `indices`
+    int count = 0;
+};
+
+std::vector<ChannelRun>
+channel_runs(const RowReader& rows, const std::vector<int>& indices)
+{
+    std::vector<ChannelRun> runs;
+    for (size_t k = 0; k < indices.size(); ++k) {
+        const int c = indices[k];
+        if (!runs.empty()) {
+            ChannelRun& r  = runs.back();
+            const int prev = indices[size_t(r.first + r.count - 1)];
+            if (rows.format(c) == rows.format(prev)
+                && rows.adjacent(prev, c)) {
+                ++r.count;
+                continue;
+            }
+        }
+        runs.push_back({ int(k), 1 });
+    }
+    return runs;
+}
+
+
+/// The rows the current strip holds: the strip's own rows (`core`) and the
+/// rows around them that they depend on (`held`: the filter's halo, and
+/// the residual layer mask's reach), x over the noisy input's columns.
+struct Strip {
+    ROI core, held;
+    InputFiles* files = nullptr;
+    int threads       = 0;
+
+    /// A role's channels over the held rows: a float image of its own, or
+    /// for an image only read (`read_only`) and whose channels lie next to
+    /// each other in the file in one pixel type, the file's rows themselves
+    /// (no copy; the operations take any pixel type and convert exactly as
+    /// the copy would). Valid until the rows move on.
+    ImageBuf image(const Selection& s, bool read_only = false) const
+    {
+        const RowReader& rows = files->rows(s.path);
+        const int nch         = int(s.indices.size());
+        const std::vector<ChannelRun> runs = channel_runs(rows, s.indices);
+        const int c0    = s.indices[0];
+        const bool wrap = read_only && runs.size() == 1;
+        ImageSpec spec(held.width(), held.height(), nch,
+                       wrap ? rows.format(c0) : TypeFloat);
+        spec.x = spec.full_x = held.xbegin;
+        spec.y = spec.full_y = held.ybegin;
+        spec.channelnames    = s.names;
+        spec.alpha_channel   = -1;
+        for (int c = 0; c < nch; ++c)
+            if (Strutil::iequals(s.names[size_t(c)], "A")
+                || Strutil::iequals(s.names[size_t(c)], "alpha"))
+                spec.alpha_channel = c;
+        if (wrap)
+            return ImageBuf(spec,
+                            const_cast<unsigned char*>(
+                                rows.at(c0, held.xbegin, held.ybegin)),
+                            rows.stride(c0), rows.row_stride(c0));
+        ImageBuf img(spec, InitializePixels::No);
+        auto* px = static_cast<unsigned char*>(img.localpixels());
+        const stride_t pixel = stride_t(nch) * 4;
+        parallel_for(int64_t(held.ybegin), int64_t(held.yend), [&](int64_t y) {
+            unsigned char* dst = px
+                                 + size_t(y - held.ybegin) * size_t(pixel)
+                                       * size_t(held.width());
+            for (const ChannelRun& r : runs) {
+                const int c = s.indices[size_t(r.first)];
+                move_channels(rows.at(c, held.xbegin, int(y)), rows.format(c),
+                              rows.stride(c), dst + 4 * r.first, TypeFloat,
+                              pixel, r.count, held.width());
+            }
+        }, paropt(threads));
+        return img;
+    }
+
+    /// The sum of the images of `terms`, a float image of its own unless
+    /// only read (`read_only`).
+    ImageBuf sum(const std::vector<Selection>& terms,
+                 bool read_only = true) const
+    {
+        ImageBuf total;
+        for (const Selection& t : terms) {
+            ImageBuf img = image(t, total.initialized()
+                                        || (read_only && terms.size() == 1));
+            if (!total.initialized())
+                total = std::move(img);
+            else if (!ImageBufAlgo::add(total, total, img, {}, threads))
+                fail(format("'{}': {}", t.path, one_line(total.geterror())));
+        }
+        return total;
+    }
+};
 
 
 /// Fill in the defaults of the convention the input follows.
@@ -311,8 +428,9 @@ resolve_colour(const Job& j, InputFiles& files, colour::ColourConfig& config,
         return false;
     }
     if (!config.load(j.colour.config, err)
-        || !colour::resolve_job_spaces(config, j.colour, files.image(j.in.path),
-                                       files.image(albedo.path),
+        || !colour::resolve_job_spaces(config, j.colour,
+                                       *files.header(j.in.path).first,
+                                       *files.header(albedo.path).first,
                                        albedo.path == j.in.path, spaces,
                                        log, err))
         fail(err);
@@ -321,34 +439,32 @@ resolve_colour(const Job& j, InputFiles& files, colour::ColourConfig& config,
 
 
 std::string
-channel_list(const ImageSpec& spec, const std::vector<int>& idx)
+channel_list(const std::vector<std::string>& names,
+             const std::vector<int>& idx)
 {
     std::string s;
     for (int i : idx)
-        s += (s.empty() ? "" : ",") + spec.channelnames[size_t(i)];
+        s += (s.empty() ? "" : ",") + names[size_t(i)];
     return s;
 }
 
 
-/// The sum of the selections of `selections` ('+' between them) of the
-/// --in file, each R,G,B.
-ImageBuf
-load_sum(InputFiles& files, const std::string& path,
-         const std::string& selections, const ImageBuf& noisy,
-         std::string& shown)
+/// The selections of `selections` ('+' between them) of the --in file,
+/// each R,G,B: the terms of a sum.
+std::vector<Selection>
+select_sum(InputFiles& files, const std::string& path,
+           const std::string& selections, const ROI& noisy,
+           std::string& shown)
 {
-    ImageBuf sum;
+    std::vector<Selection> terms;
     for (const std::string& part : Strutil::splits(selections, "+")) {
-        RoleImage r = load_role(files, { path, part, true },
-                                Role::LayerRadiance, &noisy, path);
+        terms.push_back(select_role(files, { path, part, true },
+                                    Role::LayerRadiance, &noisy, path));
         shown += (shown.empty() ? "" : " + ")
-                 + channel_list(noisy.spec(), r.indices);
-        if (!sum.initialized())
-            sum = std::move(r.image);
-        else if (!ImageBufAlgo::add(sum, sum, r.image))
-            fail(format("'{}': {}", path, one_line(sum.geterror())));
+                 + channel_list(files.header(path).channelnames,
+                                terms.back().indices);
     }
-    return sum;
+    return terms;
 }
 
 
@@ -400,64 +516,128 @@ mask_negligible_residual(ImageBuf& albedo, const ImageBuf& residual,
 }
 
 
-/// The layers of a layered denoise, read.
-struct LoadedLayers {
-    std::vector<ImageBuf> radiance, albedo, denoised;
-    std::vector<FilterStats> stats;
-    ImageBuf residual;
+/// The layers of a layered denoise as channel selections: each layer's
+/// radiance and albedo sums, and the residual.
+struct LayersPlan {
+    struct One {
+        std::string name;
+        std::vector<Selection> radiance, albedo;
+        bool divided = false, reflected = false;
+    };
+    std::vector<One> layers;  ///< the given ones, then the residual's
+    /// The residual's terms; none: the beauty minus the given layers.
+    std::vector<Selection> residual;
+    /// The residual is denoised as the last layer (residual_albedo), but for
+    /// these terms, added as they are (residual_unfiltered).
+    bool residual_is_layer = false;
+    std::vector<Selection> residual_unfiltered;
+    /// How far mask_negligible_residual() looks: rows a strip reads beyond
+    /// the filter's halo (0 without a residual layer).
+    int reach = 0;
 };
 
-/// Read the layers and the residual; the residual is, unless selected, the
-/// beauty minus the sum of the unfiltered layers, so that nothing of the
-/// beauty is lost (in Cycles: Emit + Env, and any lobe whose passes were
-/// not written). With `residual_albedo`, the residual becomes one more
-/// layer, denoised with that albedo (see Convention::residual_albedo).
-std::vector<Layer>
-load_layers(InputFiles& files, const Job& j,
+/// Choose the layers and the residual; the residual is, unless selected,
+/// the beauty minus the sum of the unfiltered layers, so that nothing of
+/// the beauty is lost (in Cycles: Emit + Env, and any lobe whose passes
+/// were not written). With `residual_albedo`, the residual becomes one
+/// more layer, denoised with that albedo (see Convention::residual_albedo).
+LayersPlan
+plan_layers(InputFiles& files, const Job& j,
             const std::vector<LayerArg>& args, const std::string& residual,
             const std::string& residual_albedo,
             const std::string& residual_layer,
-            const std::string& residual_unfiltered, const ImageBuf& noisy,
-            const ImageBuf& beauty, LoadedLayers& l,
+            const std::string& residual_unfiltered, const ROI& noisy,
             std::vector<std::string>& log)
 {
-    const size_t n = args.size() + (residual_albedo.empty() ? 0 : 1);
-    l.radiance.resize(n);
-    l.albedo.resize(n);
-    l.denoised.resize(n);
-    l.stats.resize(n);
-    std::vector<Layer> layers(n);
-    auto add_layer = [&](size_t i, const std::string& name, bool divided,
-                         bool reflected) {
-        layers[i].name      = name;
-        layers[i].radiance  = &l.radiance[i];
-        layers[i].albedo    = &l.albedo[i];
-        layers[i].divided   = divided;
-        layers[i].reflected = reflected;
-        layers[i].denoised = &l.denoised[i];
-        layers[i].stats    = &l.stats[i];
-    };
-    for (size_t i = 0; i < args.size(); ++i) {
-        const LayerArg& a = args[i];
+    LayersPlan plan;
+    for (const LayerArg& a : args) {
         std::string shown_radiance, shown_albedo;
-        l.radiance[i] = load_sum(files, j.in.path, a.radiance, noisy,
-                                 shown_radiance);
-        l.albedo[i]   = load_sum(files, j.in.path, a.albedo, noisy,
-                                 shown_albedo);
-        add_layer(i, a.name, a.divided, a.reflected);
+        LayersPlan::One one;
+        one.name      = a.name;
+        one.divided   = a.divided;
+        one.reflected = a.reflected;
+        one.radiance = select_sum(files, j.in.path, a.radiance, noisy,
+                                  shown_radiance);
+        one.albedo   = select_sum(files, j.in.path, a.albedo, noisy,
+                                  shown_albedo);
+        plan.layers.push_back(std::move(one));
         log.push_back(format("  layer     {}: {} with albedo {}{}{}", a.name,
                              shown_radiance, shown_albedo,
                              a.divided ? " (divided by it)" : "",
                              a.reflected ? " (reflected: stricter edge test)"
                                          : ""));
     }
-    std::string shown_residual;
+    std::string shown_residual = "the beauty minus the layers";
     if (!residual.empty()) {
-        l.residual = load_sum(files, j.in.path, residual, noisy,
-                              shown_residual);
+        shown_residual.clear();
+        plan.residual = select_sum(files, j.in.path, residual, noisy,
+                                   shown_residual);
+    }
+    if (residual_albedo.empty()) {
+        log.push_back("  residual  " + shown_residual + ", not filtered");
+        return plan;
+    }
+    std::string shown_albedo;
+    LayersPlan::One one;
+    one.name   = residual_layer;
+    one.albedo = select_sum(files, j.in.path, residual_albedo, noisy,
+                            shown_albedo);
+    plan.layers.push_back(std::move(one));
+    plan.residual_is_layer = true;
+    plan.reach             = std::max(j.filter.r_max, 0);
+    if (!residual_unfiltered.empty()) {
+        std::string shown_unfiltered;
+        plan.residual_unfiltered = select_sum(files, j.in.path,
+                                              residual_unfiltered, noisy,
+                                              shown_unfiltered);
+        shown_residual += " minus " + shown_unfiltered;
+        log.push_back("  residual  " + shown_unfiltered + ", not filtered");
+    }
+    log.push_back(format("  layer     {}: {} with albedo {}", residual_layer,
+                         shown_residual, shown_albedo));
+    return plan;
+}
+
+
+/// The layers of one strip, read.
+struct LoadedLayers {
+    std::vector<ImageBuf> radiance, albedo, denoised;
+    std::vector<FilterStats> stats;
+    ImageBuf residual;
+};
+
+/// Read the strip's layers and residual as `plan` says.
+std::vector<Layer>
+load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
+            const ImageBuf& beauty, LoadedLayers& l)
+{
+    const size_t n = plan.layers.size();
+    l.radiance.assign(n, ImageBuf());
+    l.albedo.assign(n, ImageBuf());
+    l.denoised.assign(n, ImageBuf());
+    l.stats.assign(n, FilterStats());
+    l.residual.reset();
+    std::vector<Layer> layers(n);
+    const size_t given = plan.residual_is_layer ? n - 1 : n;
+    for (size_t i = 0; i < n; ++i) {
+        const LayersPlan::One& one = plan.layers[i];
+        if (i < given)
+            l.radiance[i] = strip.sum(one.radiance);
+        // The residual layer's albedo is masked below: a copy of its own.
+        l.albedo[i]         = strip.sum(one.albedo, i < given);
+        layers[i].name      = one.name;
+        layers[i].radiance  = &l.radiance[i];
+        layers[i].albedo    = &l.albedo[i];
+        layers[i].divided   = one.divided;
+        layers[i].reflected = one.reflected;
+        layers[i].denoised  = &l.denoised[i];
+        layers[i].stats     = &l.stats[i];
+    }
+    if (!plan.residual.empty()) {
+        l.residual = strip.sum(plan.residual, !plan.residual_is_layer);
     } else {
         std::vector<Layer> unfiltered(layers.begin(),
-                                      layers.begin() + args.size());
+                                      layers.begin() + long(given));
         for (Layer& layer : unfiltered) {
             layer.filter   = false;
             layer.denoised = nullptr;
@@ -470,124 +650,111 @@ load_layers(InputFiles& files, const Job& j,
         // RGB only: the beauty's alpha would mark the residual's pixels
         // "no surface" for the filter.
         l.residual.reset(ImageSpec(rgb, TypeFloat));
-        if (!layered_denoise(sum, unfiltered, nullptr, {}, j.filter,
+        FilterOptions sum_options = j.filter;
+        sum_options.progress      = nullptr;
+        if (!layered_denoise(sum, unfiltered, nullptr, {}, sum_options,
                              nullptr, rgb, j.threads)
             || !ImageBufAlgo::sub(l.residual, beauty, sum, rgb, j.threads))
             fail(format("layers of '{}': {}", j.in.path,
                         one_line(sum.has_error() ? sum.geterror()
                                                  : l.residual.geterror())));
-        shown_residual = "the beauty minus the layers";
     }
-    if (residual_albedo.empty()) {
-        log.push_back("  residual  " + shown_residual + ", not filtered");
+    if (!plan.residual_is_layer)
         return layers;
-    }
     const size_t i = n - 1;
-    std::string shown_albedo;
     l.radiance[i].swap(l.residual);  // l.residual: uninitialized again
-    l.albedo[i] = load_sum(files, j.in.path, residual_albedo, noisy,
-                           shown_albedo);
-    add_layer(i, residual_layer, false, false);
-    if (!residual_unfiltered.empty()) {
-        std::string shown_unfiltered;
-        l.residual = load_sum(files, j.in.path, residual_unfiltered, noisy,
-                              shown_unfiltered);
-        if (!ImageBufAlgo::sub(l.radiance[i], l.radiance[i], l.residual,
-                               {}, j.threads))
+    if (!plan.residual_unfiltered.empty()) {
+        l.residual = strip.sum(plan.residual_unfiltered);
+        if (!ImageBufAlgo::sub(l.radiance[i], l.radiance[i], l.residual, {},
+                               j.threads))
             fail(format("layers of '{}': {}", j.in.path,
                         one_line(l.radiance[i].geterror())));
-        shown_residual += " minus " + shown_unfiltered;
-        log.push_back("  residual  " + shown_unfiltered + ", not filtered");
     }
-    if (l.albedo[i].spec().format != TypeFloat)
-        l.albedo[i] = l.albedo[i].copy(TypeFloat);
-    mask_negligible_residual(l.albedo[i], l.radiance[i], beauty,
-                             j.filter.r_max, j.threads);
-    log.push_back(format("  layer     {}: {} with albedo {}", residual_layer,
-                         shown_residual, shown_albedo));
+    mask_negligible_residual(l.albedo[i], l.radiance[i], beauty, plan.reach,
+                             j.threads);
     return layers;
 }
 
 
-/// Write `rgb` (3 channels) into the channels `names` of `out`, appending
-/// those that do not exist (in pixel type `type`).
+/// One channel of the output and where its pixels come from: a channel of
+/// the --in file, or a channel of a denoised image of the strip.
+struct OutputChannel {
+    int file = -1;  ///< channel of the --in file, or -1
+    int image = -1, image_channel = 0;  ///< else: denoised image, channel
+    TypeDesc type;  ///< pixel type in the output
+};
+
+/// Write `rgb` (3 channels, the denoised image `image`) into the output
+/// channels `names`, appending those that do not exist (in pixel type
+/// `type`) with the output spec's metadata kept.
 void
-put_channels(ImageBuf& out, std::vector<TypeDesc>& formats,
-             const ImageBuf& rgb, const std::vector<std::string>& names,
-             TypeDesc type)
+put_channels(ImageSpec& spec, std::vector<OutputChannel>& channels,
+             int image, const std::vector<std::string>& names, TypeDesc type)
 {
-    const ROI roi = out.roi();
-    std::vector<float> plane(roi.npixels());
     for (int c = 0; c < 3; ++c) {
-        int dc = out.spec().channelindex(names[size_t(c)]);
+        int dc = spec.channelindex(names[size_t(c)]);
         if (dc < 0) {
-            ImageBuf one, appended;
-            if (!ImageBufAlgo::channels(one, rgb, 1, { c }, {},
-                                        { names[size_t(c)] })
-                || !ImageBufAlgo::channel_append(appended, out, one))
-                fail(format("cannot add channel '{}': {}", names[size_t(c)],
-                            one_line(appended.geterror())));
-            ImageSpec spec    = out.spec();  // keep the metadata
-            spec.nchannels    = appended.nchannels();
             spec.channelnames.push_back(names[size_t(c)]);
-            appended.specmod() = spec;
-            out = std::move(appended);
-            formats.push_back(type);
+            spec.nchannels = int(spec.channelnames.size());
+            channels.push_back({ -1, image, c, type });
             continue;
         }
-        rgb.get_pixels(ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1,
-                           c, c + 1),
-                       TypeFloat, plane.data());
-        out.set_pixels(ROI(roi.xbegin, roi.xend, roi.ybegin, roi.yend, 0, 1,
-                           dc, dc + 1),
-                       TypeFloat, plane.data());
+        channels[size_t(dc)].file          = -1;
+        channels[size_t(dc)].image         = image;
+        channels[size_t(dc)].image_channel = c;
     }
 }
 
 
 /// Each output channel's pixel type: the input's, or `data_type`;
 /// Cryptomatte channels always float (their ids are float bit patterns).
-/// Set for writing, and returned.
 std::vector<TypeDesc>
-set_write_formats(ImageBuf& out, std::vector<TypeDesc> formats,
-                  TypeDesc data_type)
+write_formats(const ImageSpec& spec, std::vector<OutputChannel>& channels,
+              TypeDesc data_type)
 {
     std::vector<std::string> crypto_layers;
-    for (const ParamValue& p : out.spec().extra_attribs) {
+    for (const ParamValue& p : spec.extra_attribs) {
         const std::string name = p.name().string();
         if (Strutil::starts_with(name, "cryptomatte/")
             && Strutil::ends_with(name, "/name"))
-            crypto_layers.push_back(out.spec().get_string_attribute(name));
+            crypto_layers.push_back(spec.get_string_attribute(name));
     }
-    for (size_t c = 0; c < formats.size(); ++c) {
+    std::vector<TypeDesc> formats;
+    for (size_t c = 0; c < channels.size(); ++c) {
+        TypeDesc& t = channels[c].type;
         if (data_type != TypeUnknown)
-            formats[c] = data_type;
-        if (is_cryptomatte_channel(out.spec().channelnames[c], crypto_layers))
-            formats[c] = TypeFloat;
+            t = data_type;
+        if (is_cryptomatte_channel(spec.channelnames[c], crypto_layers))
+            t = TypeFloat;
+        formats.push_back(t);
     }
-    out.set_write_format(formats);
     return formats;
 }
 
 
-/// The memory a frame needs besides its input files' pixels (read as
-/// float, each file at its own size). Per pixel of the frame: the role
-/// images (up to 24 float channels), the demodulated, filtered and denoised
-/// radiance (3 x 4 floats) and the output plane. Per pixel of one filter
-/// tile with its halo (src/regression_filter.cpp: 1024 x 1024 plus
-/// 2 (2 r_max + 4)): the filter's planes and accumulators, ~130 bytes. Per
-/// pixel and layer in layers mode (the residual counted as one): the
-/// layer's radiance, albedo and denoised radiance (3 x 3 floats; the
-/// filter's memory is reused from one layer to the next). Rounded up: the
-/// guard must err on the side of refusing. Measured: 1024 x 1024 RGBA half
-/// with albedo, normal and depth peaks at 352 MiB, estimated 396 MiB;
-/// 1024 x 1024 half with albedo and two Arnold-style layers (18 channels),
-/// --rmax 2, peaks at 331 MiB (beauty) and 412 MiB (layers), estimated 424
-/// and 544 MiB.
-constexpr double kFrameBytesPerPixel = 160;
-constexpr double kTileBytesPerPixel  = 192;
-constexpr double kLayerBytesPerPixel = 40;
-constexpr double kFilterTile         = 1024;
+/// The output spec as the --in file's pixels read into one ImageBuf have
+/// it: part 0's spec, with the channels of every part, each part's
+/// metadata that part 0 lacks (the ImageBuf of the whole frame zdenoise
+/// used to read held exactly this).
+ImageSpec
+output_spec(const InputHeader& in)
+{
+    ImageSpec spec = in.spec;
+    spec.set_format(TypeFloat);
+    if (in.parts == 1)
+        return spec;
+    for (size_t p = 1; p < in.specs.size(); ++p)
+        for (const ParamValue& v : in.specs[p].extra_attribs)
+            if (!spec.find_attribute(v.name()))
+                spec.extra_attribs.push_back(v);
+    spec.nchannels    = int(in.channelnames.size());
+    spec.channelnames = in.channelnames;
+    spec.erase_attribute("name");
+    spec.erase_attribute("oiio:subimagename");
+    spec.erase_attribute("oiio:subimages");
+    return spec;
+}
+
 
 std::string
 readable_size(double bytes)
@@ -597,50 +764,223 @@ readable_size(double bytes)
                         : format("{:.1f} GiB", mib / 1024.0);
 }
 
-/// Refuse, before any pixel is read, a job whose frame would need more
-/// memory than allowed: an oversized (or corrupt) header must fail with a
-/// message, not get the process killed by the kernel. `layers`: the number
-/// of layers of a layered denoise, 0 for the beauty.
-void
-check_memory(const Job& j, InputFiles& files, size_t layers)
+
+/// The memory a strip needs. Measured peaks of the heap (docs/PERFORMANCE.md,
+/// "Memory") sit at or below these estimates, which leave out what does
+/// not depend on the job (the program and its libraries); the guard must
+/// err on the side of refusing.
+struct StripCost {
+    double held_pixel = 0;  ///< per pixel of the held rows (strip + halo)
+    double core_pixel = 0;  ///< per pixel of the strip's own rows
+    double file_row   = 0;  ///< the input files' held rows, per row
+    double out_row    = 0;  ///< one output row as the sink takes it
+    double fixed      = 0;  ///< decoders, encoder, an output held whole
+    int width = 0, height = 0;
+    int halo   = 0;  ///< the filter's (filter_halo())
+    int around = 0;  ///< rows read above and below a strip (>= halo)
+
+    /// Filter: per pixel of one internal tile of regression_filter()
+    /// (1024 x 1024) with its halo, its decoded planes and accumulators.
+    static constexpr double kTileBytesPerPixel = 192;
+    static constexpr int kFilterTile           = 1024;
+    /// Output rows are assembled and written this many at a time.
+    static constexpr int kBandRows = 32;
+
+    double bytes(int rows) const
+    {
+        const double held = std::min(double(height),
+                                     double(rows) + 2.0 * around);
+        const double tile_w = std::min(double(width),
+                                       double(kFilterTile) + 2.0 * halo);
+        const double tile_h = std::min(held,
+                                       double(kFilterTile) + 2.0 * halo);
+        return fixed + file_row * held + held_pixel * width * held
+               + core_pixel * width * double(rows)
+               + out_row * std::min(rows, kBandRows)
+               + kTileBytesPerPixel * tile_w * tile_h;
+    }
+};
+
+
+/// What an OpenEXR reader or writer of a file with these pixels keeps
+/// besides them: per thread of OpenEXR's pool, two blocks (tiles, or rows:
+/// 16 for zip, 32 for piz, ...) in flight, each with its compressor's
+/// buffers (measured: three times the block for zip).
+double
+codec_bytes(const ImageSpec& spec, size_t pixel_bytes)
 {
-    const uint64_t limit = j.mem_limit ? j.mem_limit : default_memory_limit();
-    const InputHeader& in  = files.header(j.in.path);
-    const ImageSpec& noisy = in.spec;
-    // In double: a corrupt header's sizes may overflow 64-bit products.
-    const double pixels = double(noisy.width) * double(noisy.height);
-    double needed       = 0.0;
-    std::set<std::string> seen;
-    for (const std::string& path : input_paths(j))
-        if (seen.insert(path).second) {
-            const InputHeader& h = files.header(path);
-            needed += 4.0 * double(h.channelnames.size())
-                      * double(h.spec.width) * double(h.spec.height);
-        }
-    const double per_pixel
-        = kFrameBytesPerPixel
-          + (layers ? kLayerBytesPerPixel * double(layers + 1) : 0.0);
-    const double tile = kFilterTile + 4.0 * j.filter.r_max + 8.0;
-    needed += per_pixel * pixels
-              + kTileBytesPerPixel * std::min(double(noisy.width), tile)
-                    * std::min(double(noisy.height), tile);
-    if (needed > double(limit))
-        fail(format("'{}' is {}x{} with {} channels: denoising it{} needs "
-                    "about {}, more than the memory limit of {}",
-                    j.in.path, noisy.width, noisy.height,
-                    in.channelnames.size(),
-                    layers ? " in layers mode" : "",
-                    readable_size(needed), readable_size(double(limit))));
+    const std::string c = Strutil::lower(spec.get_string_attribute("compression"));
+    int threads = 0;
+    OIIO::getattribute("exr_threads", threads);
+    threads = std::max(threads, 1);
+    if (spec.tile_width)
+        return 3.0 * 2.0 * threads * double(spec.tile_width)
+               * double(spec.tile_height) * double(pixel_bytes);
+    int rows = 16;
+    if (c.empty() || c == "none" || c == "rle" || c == "zips")
+        rows = 1;
+    else if (Strutil::starts_with(c, "dwab"))
+        rows = 256;
+    else if (!Strutil::starts_with(c, "zip"))
+        rows = 32;
+    return 3.0 * 2.0 * threads * rows * double(pixel_bytes)
+           * double(spec.width);
 }
 
 
+/// How many rows a strip has: --tile, or else as many as keep a strip's
+/// memory within a comfortable size (or the memory limit, when that is
+/// lower), in strips of equal height. Strips are at most as tall as the
+/// filter's internal tile: up to that, cutting the frame costs the filter
+/// nothing a whole-frame run does not pay too (a strip boundary, like a
+/// tile boundary, makes the centres within r_max of it be fitted twice).
+/// Below 256 rows that cost grows quickly (2 r_max of S rows), so strips
+/// are thinner than that only when the memory limit demands it. Refuses,
+/// before any pixel is read, a job whose strip would need more memory than
+/// allowed: an oversized (or corrupt) header must fail with a message, not
+/// get the process killed.
 void
-run(Job j, JobResult& result)
+plan_strips(const Job& j, const InputHeader& in, const StripCost& cost,
+            JobResult& result)
+{
+    const uint64_t limit = j.mem_limit ? j.mem_limit : default_memory_limit();
+    // Leaves room for the rest of a render node's work; a 1080p frame with
+    // 54 passes takes four strips of 270 rows.
+    constexpr double kComfortable = 256.0 * (1 << 20);
+    constexpr int kEfficient      = 256;
+    constexpr int kThinnest       = 16;
+    const int height = cost.height;
+    int rows         = 0;
+    double needed    = 0.0;
+    if (j.tile_rows > 0) {
+        rows   = std::min(j.tile_rows, height);
+        needed = cost.bytes(rows);
+    } else {
+        const double budget = std::min(double(limit), kComfortable);
+        int n  = (height + StripCost::kFilterTile - 1) / StripCost::kFilterTile;
+        rows   = (height + n - 1) / n;
+        needed = cost.bytes(rows);
+        while (needed > budget && rows > kThinnest) {
+            const int next = (height + n) / (n + 1);
+            if (next < kEfficient && needed <= double(limit))
+                break;
+            ++n;
+            rows   = next;
+            needed = cost.bytes(rows);
+        }
+    }
+    if (needed > double(limit)) {
+        const std::string how
+            = j.tile_rows > 0 ? format(" in strips of {} rows (--tile)", rows)
+              : rows < height ? format(" even in strips of {} rows", rows)
+                              : std::string();
+        fail(format("'{}' is {}x{} with {} channels: denoising it needs "
+                    "about {}{}, more than the memory limit of {}",
+                    j.in.path, cost.width, height, in.channelnames.size(),
+                    readable_size(needed), how,
+                    readable_size(double(limit))));
+    }
+    result.strip_rows      = rows;
+    result.strips          = (height + rows - 1) / rows;
+    result.estimated_bytes = needed;
+}
+
+
+/// Where the output of one strip comes from and goes to.
+struct Output {
+    OutputSink* sink = nullptr;
+    ImageSpec spec;
+    std::vector<OutputChannel> channels;
+    std::vector<TypeDesc> row_types;  ///< as the sink takes them
+    std::vector<size_t> offset;       ///< of each channel in a pixel
+    size_t pixel_bytes = 0;
+    std::vector<unsigned char> band;
+
+    void set_row_types(bool float_rows)
+    {
+        pixel_bytes = 0;
+        for (const OutputChannel& c : channels) {
+            row_types.push_back(float_rows ? TypeFloat : c.type);
+            offset.push_back(pixel_bytes);
+            pixel_bytes += row_types.back().size();
+        }
+    }
+
+    /// Assemble the output rows of `strip` band by band and give them to
+    /// the sink: channels of the --in file moved from its rows (in runs of
+    /// neighbours of one type), the others from the denoised `images`.
+    void write(const Strip& strip, const RowReader& in,
+               const std::vector<const ImageBuf*>& images, int threads)
+    {
+        const ROI& core = strip.core;
+        const int width = core.width();
+        // Runs of output channels taken from neighbouring file channels of
+        // one type into neighbouring output channels of one type.
+        struct Run {
+            int first, count, file;
+        };
+        std::vector<Run> runs;
+        for (size_t c = 0; c < channels.size(); ++c) {
+            const OutputChannel& oc = channels[c];
+            if (oc.file < 0)
+                continue;
+            if (!runs.empty()) {
+                Run& r        = runs.back();
+                const int pc  = r.first + r.count - 1;
+                const int pf  = r.file + r.count - 1;
+                if (int(c) == pc + 1 && oc.file == pf + 1
+                    && in.format(oc.file) == in.format(pf)
+                    && row_types[c] == row_types[size_t(pc)]
+                    && in.adjacent(pf, oc.file)) {
+                    ++r.count;
+                    continue;
+                }
+            }
+            runs.push_back({ int(c), 1, oc.file });
+        }
+        const size_t row_bytes = pixel_bytes * size_t(width);
+        for (int y0 = core.ybegin; y0 < core.yend;
+             y0 += StripCost::kBandRows) {
+            const int y1 = std::min(y0 + StripCost::kBandRows, core.yend);
+            band.resize(row_bytes * size_t(y1 - y0));
+            parallel_for(int64_t(y0), int64_t(y1), [&](int64_t y) {
+                unsigned char* row = band.data() + size_t(y - y0) * row_bytes;
+                for (const Run& r : runs)
+                    move_channels(in.at(r.file, core.xbegin, int(y)),
+                                  in.format(r.file), in.stride(r.file),
+                                  row + offset[size_t(r.first)],
+                                  row_types[size_t(r.first)],
+                                  stride_t(pixel_bytes), r.count, width);
+            }, paropt(threads));
+            for (size_t c = 0; c < channels.size(); ++c) {
+                const OutputChannel& oc = channels[c];
+                if (oc.file >= 0)
+                    continue;
+                const ImageBuf& img = *images[size_t(oc.image)];
+                if (!img.get_pixels(ROI(core.xbegin, core.xend, y0, y1, 0, 1,
+                                        oc.image_channel,
+                                        oc.image_channel + 1),
+                                    row_types[c], band.data() + offset[c],
+                                    stride_t(pixel_bytes),
+                                    stride_t(row_bytes)))
+                    fail(format("cannot assemble the output: {}",
+                                one_line(img.geterror())));
+            }
+            std::string err;
+            if (!sink->rows(y0, y1, band.data(), err))
+                throw SinkFailure { err };
+        }
+    }
+};
+
+
+void
+run(Job j, OutputSink& sink, JobResult& result)
 {
     InputFiles files;
     Timer read_timer;
-    const Convention conv
-        = detect_convention(files.header(j.in.path).channelnames);
+    const InputHeader& in = files.header(j.in.path);
+    const Convention conv = detect_convention(in.channelnames);
     apply_defaults(j, conv, result.log);
     const std::vector<LayerArg>& layer_args = j.layers.empty() ? conv.layers
                                                                : j.layers;
@@ -654,32 +994,49 @@ run(Job j, JobResult& result)
         fail(format("no albedo: '{}' has no Denoising Albedo pass; give "
                     "--albedo FILE",
                     j.in.path));
-    check_memory(j, files, layered ? layer_args.size() : 0);
-    InputFile& input = files.get(j.in.path);
-    ImageBuf& noisy  = input.image;
+    if (j.tile_rows < 0)
+        fail(format("--tile needs a number of rows >= 1 (or 0: automatic), "
+                    "got {}",
+                    j.tile_rows));
+    const ROI noisy = in.window();
 
-    RoleImage radiance = load_role(files, j.in, Role::Radiance, nullptr,
-                                   "");
-    RoleImage albedo;
+    // Every channel the job reads, chosen from the headers: a missing
+    // channel or a file of other pixels fails before any pixel is read.
+    const Selection radiance = select_role(files, j.in, Role::Radiance,
+                                           nullptr, "");
+    Selection albedo;
     if (!layered)
-        albedo = load_role(files, j.albedo, Role::Albedo, &noisy, j.in.path);
+        albedo = select_role(files, j.albedo, Role::Albedo, &noisy,
+                             j.in.path);
     struct Optional {
         const InputArg* arg;
         Role role;
         bool disabled;
         const char* label;
-        RoleImage image;
+        bool used = false;
+        Selection selection;
+        ImageBuf image;  ///< the current strip's
     } optional[] = {
-        { &j.normal, Role::Normal, j.no_normal, "normal", {} },
-        { &j.depth, Role::Depth, j.no_depth, "depth", {} },
-        { &j.id, Role::ObjectId, j.no_id, "id", {} },
-        { &j.variance, Role::Variance, false, "variance", {} },
-        { &j.half_a, Role::Radiance, false, "half A", {} },
-        { &j.half_b, Role::Radiance, false, "half B", {} },
+        { &j.normal, Role::Normal, j.no_normal, "normal", false, {}, {} },
+        { &j.depth, Role::Depth, j.no_depth, "depth", false, {}, {} },
+        { &j.id, Role::ObjectId, j.no_id, "id", false, {}, {} },
+        { &j.variance, Role::Variance, false, "variance", false, {}, {} },
+        { &j.half_a, Role::Radiance, false, "half A", false, {}, {} },
+        { &j.half_b, Role::Radiance, false, "half B", false, {}, {} },
     };
     for (Optional& o : optional)
-        if (o.arg->given && !o.disabled)
-            o.image = load_role(files, *o.arg, o.role, &noisy, j.in.path);
+        if (o.arg->given && !o.disabled) {
+            o.selection = select_role(files, *o.arg, o.role, &noisy,
+                                      j.in.path);
+            o.used      = true;
+        }
+    // The output takes every channel of the --in file.
+    {
+        std::vector<int> all(in.channelnames.size());
+        for (size_t c = 0; c < all.size(); ++c)
+            all[c] = int(c);
+        files.want(j.in.path, all);
+    }
 
     // Radiance and albedo RGB into the working space (ocio/colour.h).
     colour::ColourConfig config;
@@ -699,48 +1056,26 @@ run(Job j, JobResult& result)
                     "('{}'): give --working-colorspace and --ocolorspace "
                     "as the input's, or use --mode beauty",
                     spaces.input));
-    if (managed) {
-        convert(radiance.image, spaces.input, spaces.working, j.in);
-        convert(albedo.image, spaces.albedo, spaces.working, j.albedo);
-        convert(optional[4].image.image, spaces.input, spaces.working,
-                j.half_a);
-        convert(optional[5].image.image, spaces.input, spaces.working,
-                j.half_b);
-        if (optional[3].image.image.initialized()
-            && spaces.input != spaces.working)
-            result.log.push_back("  variance  used as given (not converted "
-                                 "to the working space)");
-    }
+    if (managed && optional[3].used && spaces.input != spaces.working)
+        result.log.push_back("  variance  used as given (not converted "
+                             "to the working space)");
 
-    Guides guides;
-    auto guide = [](const Optional& o) {
-        return o.image.image.initialized() ? &o.image.image : nullptr;
+    result.log.push_back(format("{}x{}, {} channels in '{}'", noisy.width(),
+                                noisy.height(), in.channelnames.size(),
+                                j.in.path));
+    auto show = [&](const char* what, const Selection& s) {
+        result.log.push_back(format(
+            "  {:<9} '{}' channels {}", what, s.path,
+            channel_list(files.header(s.path).channelnames, s.indices)));
     };
-    guides.normal    = guide(optional[0]);
-    guides.depth     = guide(optional[1]);
-    guides.object_id = guide(optional[2]);
-    guides.variance  = guide(optional[3]);
-    guides.half_a    = guide(optional[4]);
-    guides.half_b    = guide(optional[5]);
-
-    const ImageSpec& s = noisy.spec();
-    result.log.push_back(format("{}x{}, {} channels in '{}'", s.width,
-                                s.height, s.nchannels, j.in.path));
-    auto show = [&](const char* what, const InputArg& arg,
-                    const RoleImage& r) {
-        if (r.image.initialized())
-            result.log.push_back(
-                format("  {:<9} '{}' channels {}", what, arg.path,
-                       channel_list(files.image(arg.path).spec(),
-                                    r.indices)));
-    };
-    show("radiance", j.in, radiance);
-    show("albedo", j.albedo, albedo);
+    show("radiance", radiance);
+    if (!layered)
+        show("albedo", albedo);
     for (const Optional& o : optional)
-        show(o.label, *o.arg, o.image);
+        if (o.used)
+            show(o.label, o.selection);
 
-    LoadedLayers loaded;
-    std::vector<Layer> layers;
+    LayersPlan layers_plan;
     if (layered) {
         const size_t mode_line = result.log.size();
         // An explicit residual (--residual) or explicit layers (--layer)
@@ -748,17 +1083,17 @@ run(Job j, JobResult& result)
         const bool own = !j.residual.empty() || !j.layers.empty();
         const std::string residual = j.residual.empty() ? conv.residual
                                                         : j.residual;
-        layers = load_layers(files, j, layer_args, residual,
-                             own ? std::string() : conv.residual_albedo,
-                             conv.residual_layer,
-                             own ? std::string() : conv.residual_unfiltered,
-                             noisy, radiance.image,
-                             loaded, result.log);
+        layers_plan = plan_layers(
+            files, j, layer_args, residual,
+            own ? std::string() : conv.residual_albedo, conv.residual_layer,
+            own ? std::string() : conv.residual_unfiltered, noisy,
+            result.log);
         result.log.insert(result.log.begin() + long(mode_line),
-                          format("mode layers: {} layer(s){}", layers.size(),
+                          format("mode layers: {} layer(s){}",
+                                 layers_plan.layers.size(),
                                  j.layers.empty() ? "" : " (--layer)"));
         result.log.push_back(
-            guides.variance || guides.half_a
+            optional[3].used || optional[4].used
                 ? "  noise     estimated per layer (--variance and --halves "
                   "describe the beauty, not a layer)"
                 : "  noise     estimated per layer");
@@ -770,61 +1105,244 @@ run(Job j, JobResult& result)
                                  ? "mode beauty"
                                  : "mode beauty (layers found: " + found
                                        + "; --mode layers uses them)");
-        if (!guides.variance && !guides.half_a)
+        if (!optional[3].used && !optional[4].used)
             result.log.push_back("  noise     estimated from the image");
     }
-    result.read_seconds = read_timer();
-    result.log.push_back("parameters " + describe(j.filter));
-
-    Timer denoise_timer;
-    ImageBuf denoised;
-    const bool ok = layered
-                        ? layered_denoise(denoised, layers,
-                                          loaded.residual.initialized()
-                                              ? &loaded.residual
-                                              : nullptr,
-                                          guides, j.filter, &result.stats,
-                                          {}, j.threads)
-                        : denoise(denoised, radiance.image, albedo.image,
-                                  guides, j.filter, &result.stats, {},
-                                  j.threads);
-    if (!ok)
-        fail(format("denoising '{}' failed: {}", j.in.path,
-                    one_line(denoised.geterror())));
-    result.denoise_seconds = denoise_timer();
-    if (managed)
-        convert(denoised, spaces.working, spaces.output, j.in);
 
     // The output: the input file with its radiance RGB replaced (and the
-    // denoised layers added with --aovs), each channel written in its input
-    // pixel type unless -d says otherwise.
-    ImageBuf& out = noisy;
-    std::vector<TypeDesc> formats = input.formats;
-    const std::vector<std::string>& names = out.spec().channelnames;
-    const std::vector<std::string> beauty
-        = { names[size_t(radiance.indices[0])],
-            names[size_t(radiance.indices[1])],
-            names[size_t(radiance.indices[2])] };
-    const TypeDesc beauty_type = formats[size_t(radiance.indices[0])];
-    put_channels(out, formats, denoised, beauty, beauty_type);
+    // denoised layers added with --aovs), each channel in its input pixel
+    // type unless -d says otherwise. Images: 0 the denoised beauty, 1 + i
+    // layer i.
+    ImageSpec spec = output_spec(in);
+    std::vector<OutputChannel> channels(in.channelnames.size());
+    for (size_t c = 0; c < channels.size(); ++c)
+        channels[c] = { int(c), -1, 0, in.format(int(c)) };
+    const std::vector<std::string>& names = in.channelnames;
+    const TypeDesc beauty_type = in.format(radiance.indices[0]);
+    put_channels(spec, channels, 0,
+                 { names[size_t(radiance.indices[0])],
+                   names[size_t(radiance.indices[1])],
+                   names[size_t(radiance.indices[2])] },
+                 beauty_type);
     if (j.write_layers)
-        for (size_t i = 0; i < layers.size(); ++i) {
-            const std::string& n = layers[i].name;
-            put_channels(out, formats, loaded.denoised[i],
+        for (size_t i = 0; i < layers_plan.layers.size(); ++i) {
+            const std::string& n = layers_plan.layers[i].name;
+            put_channels(spec, channels, int(i) + 1,
                          { n + ".R", n + ".G", n + ".B" }, beauty_type);
-            const FilterStats& st = loaded.stats[i];
+        }
+    result.channel_formats = write_formats(spec, channels, j.data_type);
+    if (managed)
+        colour::tag_colour_space(spec, spaces.output, spaces.input);
+    spec.attribute("zdenoise.version", ZDENOISE_VERSION_STRING);
+    spec.attribute("zdenoise.parameters",
+                   describe(j.filter)
+                       + (layered ? " mode=layers" : " mode=beauty"));
+
+    // Strips: their height from the memory each needs.
+    StripCost cost;
+    cost.width  = noisy.width();
+    cost.height = noisy.height();
+    cost.halo   = filter_halo(j.filter);
+    // The residual layer's mask looks further than the filter.
+    cost.around = cost.halo + layers_plan.reach;
+    for (const std::string& path : files.paths()) {
+        const InputHeader& h = files.header(path);
+        cost.file_row += double(files.rows(path).pixel_bytes())
+                         * double(h.spec.width);
+        cost.fixed += double(files.rows(path).fixed_bytes());
+        for (const ImageSpec& part : h.native)
+            cost.fixed += codec_bytes(part, part.pixel_bytes(true));
+    }
+    // Role images: copies when converted or not lying together in the
+    // file, else the file's rows themselves (Strip::image()).
+    const bool radiance_as_is = !managed || spaces.input == spaces.working;
+    auto role_bytes = [&](const Selection& s, bool read_only) {
+        return read_only && channel_runs(files.rows(s.path), s.indices).size() == 1
+                   ? 0.0
+                   : 4.0 * double(s.indices.size());
+    };
+    // The quotient (demodulate()), the filtered and the denoised radiance.
+    cost.held_pixel = role_bytes(radiance, radiance_as_is) + 16.0;
+    cost.core_pixel = 32.0;
+    if (!layered)
+        cost.held_pixel += role_bytes(albedo, !managed
+                                                  || spaces.albedo
+                                                         == spaces.working);
+    for (const Optional& o : optional)
+        if (o.used)
+            cost.held_pixel += role_bytes(o.selection,
+                                          o.role != Role::Radiance
+                                              || radiance_as_is);
+    if (layered) {
+        // Each layer's radiance and albedo sums, the residual and the sum
+        // (over the held rows), each denoised layer (over the strip).
+        cost.held_pixel += 24.0 * double(layers_plan.layers.size()) + 24.0
+                           + (layers_plan.residual_is_layer ? 8.0 : 0.0);
+        cost.core_pixel += 12.0 * double(layers_plan.layers.size());
+    }
+    Output output;
+    output.sink     = &sink;
+    output.channels = channels;
+    output.set_row_types(sink.float_rows());
+    cost.out_row = double(output.pixel_bytes) * cost.width;
+    if (sink.holds_image())
+        cost.fixed += cost.out_row * cost.height;
+    else {
+        ImageSpec scanlines = spec;  // written as scanlines (FileSink)
+        scanlines.tile_width = scanlines.tile_height = 0;
+        cost.fixed += codec_bytes(scanlines, output.pixel_bytes);
+    }
+    plan_strips(j, in, cost, result);
+    result.log.push_back(
+        result.strips == 1
+            ? format("whole frame at once (about {})",
+                     readable_size(result.estimated_bytes))
+            : format("{} strips of {} rows, each read with {} rows of halo "
+                     "around it (about {} each)",
+                     result.strips, result.strip_rows, cost.around,
+                     readable_size(result.estimated_bytes)));
+    result.log.push_back("parameters " + describe(j.filter));
+
+    for (const std::string& path : files.paths())
+        files.rows(path).reserve(std::min(result.strip_rows + 2 * cost.around,
+                                          cost.height));
+    {
+        std::string err;
+        if (!sink.begin(spec, result.channel_formats, err))
+            throw SinkFailure { err };
+    }
+    result.read_seconds += read_timer();
+
+    // Statistics summed over the strips; the mean radius from the exact
+    // sum of radii, so that it does not depend on the strips.
+    int64_t radius_sum = 0;
+    std::vector<int64_t> layer_windows, layer_radius_sums;
+    Strip strip;
+    strip.files   = &files;
+    strip.threads = j.threads;
+    FilterOptions options = j.filter;
+    options.frame         = noisy;
+    const int around      = cost.around;
+    for (int s = 0; s < result.strips; ++s) {
+        Timer strip_read;
+        strip.core        = noisy;
+        strip.core.ybegin = noisy.ybegin + s * result.strip_rows;
+        strip.core.yend   = std::min(strip.core.ybegin + result.strip_rows,
+                                     noisy.yend);
+        strip.held        = strip.core;
+        strip.held.ybegin = std::max(strip.core.ybegin - around,
+                                     noisy.ybegin);
+        strip.held.yend   = std::min(strip.core.yend + around, noisy.yend);
+        for (const std::string& path : files.paths()) {
+            std::string err;
+            if (!files.rows(path).hold(strip.held.ybegin, strip.held.yend,
+                                       j.threads, err))
+                fail(format("cannot read '{}': {}", path, one_line(err)));
+        }
+        // Images converted to the working space are copies; the others
+        // are the files' rows.
+        ImageBuf radiance_image = strip.image(radiance, radiance_as_is);
+        ImageBuf albedo_image;
+        if (!layered)
+            albedo_image = strip.image(albedo, !managed
+                                                   || spaces.albedo
+                                                          == spaces.working);
+        for (Optional& o : optional)
+            o.image = o.used ? strip.image(o.selection,
+                                           o.role != Role::Radiance
+                                               || radiance_as_is)
+                             : ImageBuf();
+        if (managed) {
+            convert(radiance_image, spaces.input, spaces.working, j.in);
+            convert(albedo_image, spaces.albedo, spaces.working, j.albedo);
+            convert(optional[4].image, spaces.input, spaces.working,
+                    j.half_a);
+            convert(optional[5].image, spaces.input, spaces.working,
+                    j.half_b);
+        }
+        Guides guides;
+        auto guide = [](const Optional& o) {
+            return o.used ? &o.image : nullptr;
+        };
+        guides.normal    = guide(optional[0]);
+        guides.depth     = guide(optional[1]);
+        guides.object_id = guide(optional[2]);
+        guides.variance  = guide(optional[3]);
+        guides.half_a    = guide(optional[4]);
+        guides.half_b    = guide(optional[5]);
+        LoadedLayers loaded;
+        std::vector<Layer> layers;
+        if (layered)
+            layers = load_layers(strip, layers_plan, j, radiance_image,
+                                 loaded);
+        result.read_seconds += strip_read();
+
+        Timer denoise_timer;
+        if (j.filter.progress)
+            options.progress = [&](float f) {
+                j.filter.progress((float(s) + f) / float(result.strips));
+            };
+        ImageBuf denoised;
+        FilterStats st;
+        const bool ok
+            = layered ? layered_denoise(denoised, layers,
+                                        loaded.residual.initialized()
+                                            ? &loaded.residual
+                                            : nullptr,
+                                        guides, options, &st, strip.core,
+                                        j.threads)
+                      : denoise(denoised, radiance_image, albedo_image,
+                                guides, options, &st, strip.core, j.threads);
+        if (!ok)
+            fail(format("denoising '{}' failed: {}", j.in.path,
+                        one_line(denoised.geterror())));
+        result.denoise_seconds += denoise_timer();
+        result.stats.pixels += st.pixels;
+        result.stats.windows += st.windows;
+        result.stats.stop_quality += st.stop_quality;
+        result.stats.stop_size += st.stop_size;
+        result.stats.stop_edge += st.stop_edge;
+        result.stats.passthrough_pixels += st.passthrough_pixels;
+        result.stats.nonfinite_pixels += st.nonfinite_pixels;
+        radius_sum += std::llround(st.mean_radius * double(st.windows));
+        layer_windows.resize(loaded.stats.size(), 0);
+        layer_radius_sums.resize(loaded.stats.size(), 0);
+        for (size_t i = 0; i < loaded.stats.size(); ++i) {
+            const FilterStats& ls = loaded.stats[i];
+            layer_windows[i] += ls.windows;
+            layer_radius_sums[i] += std::llround(ls.mean_radius
+                                                 * double(ls.windows));
+        }
+
+        Timer write_timer;
+        if (managed)
+            convert(denoised, spaces.working, spaces.output, j.in);
+        std::vector<const ImageBuf*> images = { &denoised };
+        for (const ImageBuf& l : loaded.denoised)
+            images.push_back(&l);
+        output.write(strip, files.rows(j.in.path), images, j.threads);
+        result.write_seconds += write_timer();
+    }
+    result.stats.mean_radius = result.stats.windows
+                                   ? double(radius_sum)
+                                         / double(result.stats.windows)
+                                   : 0.0;
+    if (j.write_layers)
+        for (size_t i = 0; i < layer_windows.size(); ++i) {
+            const std::string& n = layers_plan.layers[i].name;
+            const double mean    = layer_windows[i]
+                                       ? double(layer_radius_sums[i])
+                                             / double(layer_windows[i])
+                                       : 0.0;
             result.log.push_back(format(
                 "  layer {} written as {}.R,G,B (mean radius {:.2f})", n, n,
-                st.mean_radius));
+                mean));
         }
-    result.channel_formats = set_write_formats(out, formats, j.data_type);
-    if (managed)
-        colour::tag_colour_space(out.specmod(), spaces.output, spaces.input);
-    out.specmod().attribute("zdenoise.version", ZDENOISE_VERSION_STRING);
-    out.specmod().attribute("zdenoise.parameters",
-                            describe(j.filter)
-                                + (layered ? " mode=layers" : " mode=beauty"));
-    result.image = std::move(out);
+    Timer end_timer;
+    std::string err;
+    if (!sink.end(err))
+        throw SinkFailure { err };
+    result.write_seconds += end_timer();
 }
 
 }  // namespace
@@ -947,17 +1465,152 @@ input_paths(const Job& j)
 
 
 bool
-run_job(const Job& job, JobResult& result, std::string& error)
+run_job(const Job& job, OutputSink& sink, JobResult& result,
+        std::string& error)
 {
     try {
-        run(job, result);
+        run(job, sink, result);
         return true;
     } catch (const Failure& f) {
         error = f.message;
+    } catch (const SinkFailure& f) {
+        error = one_line(f.message);
     } catch (const std::exception& e) {
-        error = e.what();
+        error = one_line(e.what());
     }
     return false;
+}
+
+
+namespace {
+
+/// The output image in memory, float, with its write formats set.
+class ImageSink final : public OutputSink {
+public:
+    explicit ImageSink(ImageBuf& image)
+        : m_image(image)
+    {
+    }
+    bool begin(const ImageSpec& spec, const std::vector<TypeDesc>& formats,
+               std::string& error) override
+    {
+        m_image.reset(spec);
+        m_image.set_write_format(formats);
+        return true;
+    }
+    bool float_rows() const override { return true; }
+    bool holds_image() const override { return true; }
+    bool rows(int ybegin, int yend, const void* data,
+              std::string& error) override
+    {
+        const ImageSpec& s = m_image.spec();
+        if (m_image.set_pixels(ROI(s.x, s.x + s.width, ybegin, yend, s.z,
+                                   s.z + 1, 0, s.nchannels),
+                               TypeFloat, data))
+            return true;
+        error = m_image.geterror();
+        return false;
+    }
+
+private:
+    ImageBuf& m_image;
+};
+
+
+/// The output file, written as ImageBuf::write would write the image in
+/// memory: scanlines, each channel in its output type, the pixel type of
+/// the spec the widest.
+class FileSink final : public OutputSink {
+public:
+    explicit FileSink(const std::string& path)
+        : m_path(path)
+    {
+    }
+    bool begin(const ImageSpec& spec, const std::vector<TypeDesc>& formats,
+               std::string& error) override
+    {
+        ImageSpec s   = spec;
+        s.tile_width  = 0;
+        s.tile_height = 0;
+        s.tile_depth  = 0;
+        TypeDesc widest;
+        for (TypeDesc f : formats)
+            widest = TypeDesc::basetype_merge(widest, f);
+        s.set_format(widest);
+        s.channelformats = formats;
+        if (std::all_of(formats.begin(), formats.end(),
+                        [&](TypeDesc f) { return f == widest; }))
+            s.channelformats.clear();
+        m_out = ImageOutput::create(m_path);
+        if (!m_out)
+            return failed(OIIO::geterror(), error);
+        if (!m_out->open(m_path, s))
+            return failed(m_out->geterror(), error);
+        m_z = s.z;
+        return true;
+    }
+    bool rows(int ybegin, int yend, const void* data,
+              std::string& error) override
+    {
+        return m_out->write_scanlines(ybegin, yend, m_z, TypeUnknown, data)
+               || failed(m_out->geterror(), error);
+    }
+    bool end(std::string& error) override
+    {
+        return m_out->close() || failed(m_out->geterror(), error);
+    }
+    /// Whether the failure, if any, was writing.
+    bool write_failed() const { return m_failed; }
+
+private:
+    bool failed(std::string why, std::string& error)
+    {
+        m_failed = true;
+        error    = why.empty() ? std::string("unknown error") : why;
+        return false;
+    }
+
+    std::string m_path;
+    std::unique_ptr<ImageOutput> m_out;
+    int m_z       = 0;
+    bool m_failed = false;
+};
+
+}  // namespace
+
+
+bool
+run_job(const Job& job, JobResult& result, std::string& error)
+{
+    ImageSink sink(result.image);
+    return run_job(job, sink, result, error);
+}
+
+
+bool
+run_job_to_file(const Job& job, const std::string& path, JobResult& result,
+                std::string& error)
+{
+    // A failure of the job itself is reported as it is; only a failure to
+    // write is "cannot write PATH".
+    std::string job_error;
+    bool job_failed = false;
+    const bool ok   = write_atomically(
+        path,
+        [&](const std::string& tmp, std::string& why) {
+            FileSink sink(tmp);
+            if (run_job(job, sink, result, why))
+                return true;
+            if (!sink.write_failed()) {
+                job_failed = true;
+                job_error  = why;
+            }
+            return false;
+        },
+        error);
+    if (!ok && job_failed)
+        error = job_error;
+    return ok;
 }
 
 }  // namespace job

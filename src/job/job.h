@@ -8,6 +8,13 @@
 // the output image: the noisy input file with its radiance RGB replaced
 // (and, on request, the denoised layers added), every other channel and the
 // metadata kept.
+//
+// The frame streams through in horizontal strips: for each strip the
+// files' rows it needs (the strip and the filter's halo around it) are
+// read, the strip is denoised, and its output rows go to an OutputSink
+// (a file being written, or an image in memory). Memory follows the
+// strip, not the frame; the result is bit-identical for any strip height
+// (zdenoise::filter_halo(), FilterOptions::frame).
 
 #pragma once
 
@@ -60,11 +67,15 @@ struct Job {
     /// Largest memory (bytes) a frame may need; a larger frame is refused
     /// before its pixels are read. 0: default_memory_limit().
     uint64_t mem_limit = 0;
+    /// Rows per strip (--tile); 0: automatic (the whole frame when it is
+    /// small, else strips as tall as the memory budget allows).
+    int tile_rows = 0;
 };
 
 struct JobResult {
     /// The output image, with its per-channel write formats and the
-    /// zdenoise metadata set: ready for ImageBuf::write.
+    /// zdenoise metadata set, ready for ImageBuf::write (the run_job()
+    /// that has no sink only).
     OIIO::ImageBuf image;
     /// Each channel's pixel type in the output (as set for writing): the
     /// input's, or -d's, Cryptomatte float.
@@ -72,7 +83,40 @@ struct JobResult {
     FilterStats stats;
     /// What was read and assumed, one line each (for -v).
     std::vector<std::string> log;
-    double read_seconds = 0.0, denoise_seconds = 0.0;
+    /// Time spent reading (and converting the inputs), denoising, and
+    /// assembling and writing the output, summed over the strips.
+    double read_seconds = 0.0, denoise_seconds = 0.0, write_seconds = 0.0;
+    /// How the frame was cut: `strips` strips of `strip_rows` rows (the
+    /// last one may be shorter); the memory estimated for one.
+    int strips = 0, strip_rows = 0;
+    double estimated_bytes = 0.0;
+};
+
+/// Where run_job() puts the output image: a band of whole rows at a time,
+/// top to bottom.
+class OutputSink {
+public:
+    virtual ~OutputSink() = default;
+    /// Once, before any rows: the output's spec (data window, channels and
+    /// metadata as an ImageBuf holding the image in float has them) and each
+    /// channel's pixel type in the output.
+    virtual bool begin(const OIIO::ImageSpec& spec,
+                       const std::vector<OIIO::TypeDesc>& formats,
+                       std::string& error)
+        = 0;
+    /// Whether rows() takes every channel as float; else each channel comes
+    /// in its output pixel type (`formats`), as ImageOutput's native
+    /// scanlines are laid out.
+    virtual bool float_rows() const { return false; }
+    /// Whether the sink keeps the whole image (counted in the memory a
+    /// job needs).
+    virtual bool holds_image() const { return false; }
+    /// Rows [ybegin, yend): pixels interleaved, channels in order.
+    virtual bool rows(int ybegin, int yend, const void* data,
+                      std::string& error)
+        = 0;
+    /// After the last rows.
+    virtual bool end(std::string& error) { return true; }
 };
 
 /// The spellings of the command line and recipes: "beauty", "layers" (Auto
@@ -90,10 +134,23 @@ parse_layer(const std::string& text, LayerArg& layer);
 std::string
 layer_text(const LayerArg& layer);
 
-/// Run `job`. On failure returns false and a one-line `error` naming the
-/// file, channel or option at fault. Never throws.
+/// Run `job`, giving the output to `sink`. On failure returns false and a
+/// one-line `error` naming the file, channel or option at fault (a sink's
+/// error as the sink gave it). Never throws.
+bool
+run_job(const Job& job, OutputSink& sink, JobResult& result,
+        std::string& error);
+
+/// Run `job` into `result.image` (the whole output in memory, float).
 bool
 run_job(const Job& job, JobResult& result, std::string& error);
+
+/// Run `job` and write its output to `path` as it is computed, through a
+/// temporary file renamed into place once complete (atomic_write.h): on
+/// failure `path` is untouched and no file is left behind.
+bool
+run_job_to_file(const Job& job, const std::string& path, JobResult& result,
+                std::string& error);
 
 /// Half of the machine's memory (MemTotal, or the cgroup's memory.max when
 /// lower): room for the frame and whatever else runs on a render node.

@@ -143,7 +143,7 @@ known_keys(bool in_file_name)
     s += ", mode, residual, data-type, preset";
     for (const FilterOptionName& o : filter_option_names())
         s += std::string(", ") + o.name;
-    return s + ", threads";
+    return s + ", threads, tile";
 }
 
 /// A value as the recipe spells it, cut short for messages.
@@ -256,7 +256,8 @@ apply_overrides(json& recipe,
             else
                 fail(format("argument {}={} must be 1, 0, true or false", key,
                             text));
-        } else if (key == "threads" || (option && option->whole)) {
+        } else if (key == "threads" || key == "tile"
+                   || (option && option->whole)) {
             if (!parse_whole(text, whole))
                 fail(format("argument {}={} must be a whole number", key,
                             text));
@@ -383,6 +384,12 @@ parse(const std::string& text, const std::string& folder,
                 fail(format("\"threads\" must be 0 (automatic) or more, not "
                             "{}",
                             job.threads));
+        } else if (key == "tile") {
+            job.tile_rows = parse_whole_number(key, value);
+            if (job.tile_rows < 0)
+                fail(format("\"tile\" must be 0 (automatic) or a number of "
+                            "rows, not {}",
+                            job.tile_rows));
         } else if (const FilterOptionName* option = find_filter_option(key)) {
             if (option->whole)
                 job.filter.*(option->whole) = parse_whole_number(key, value);
@@ -552,6 +559,10 @@ recipe_text(const Job& job, const std::string& preset,
         }
     }
     recipe["threads"] = job.threads;
+    // Only when given: a recipe without it stays readable by a plugin that
+    // predates strips.
+    if (job.tile_rows > 0)
+        recipe["tile"] = job.tile_rows;
     return recipe.dump(2) + "\n";
 }
 
