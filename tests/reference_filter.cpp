@@ -57,6 +57,9 @@ namespace {
 constexpr double EPS    = 1e-8;
 constexpr double LW[3]  = { 0.2126, 0.7152, 0.0722 };
 constexpr double INF    = std::numeric_limits<double>::infinity();
+// The median of chi-square with one degree of freedom (0.454936423...), to
+// the 7 digits FILTER.md section 3 gives.
+constexpr double CHI2_MEDIAN = 0.4549364;
 
 bool
 demod_channel(const RefImage& La, int x, int y, int c, float albedo_eps)
@@ -413,7 +416,7 @@ Filter::compute_noise()
                 // median; for an even count the mean of the two middle values
                 double med = (n % 2) ? vals[n / 2]
                                      : 0.5 * (vals[n / 2 - 1] + vals[n / 2]);
-                V[idx(x, y)] = med / 0.4549;
+                V[idx(x, y)] = med / CHI2_MEDIAN;
             }
     }
     V_ = V;
