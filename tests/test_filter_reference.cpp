@@ -264,6 +264,33 @@ TEST(FilterReference, GeometricRadiusGrowth)
     }
 }
 
+// Noise estimated from z (no variance, no halves) with windows that stop on
+// quality: eta_R <= eta_target compares a value the chi-square median
+// scales, so a constant off by 8e-5 (0.4549 for 0.4549364) turns one
+// centre's stop near the target into a larger or smaller window, and the
+// pixels few other windows reach (corners, last rows) by 3e-4.
+TEST(FilterReference, EstimatedNoiseWithQualityStops)
+{
+    for (float growth : { 1.0f, 2.0f }) {
+        const std::string g = ", growth " + std::to_string(growth);
+        Case k{ "shadow edge, 16 spp, estimated, r_max 8" + g,
+                synth::shadow_edge(W, H, { 16, 31 }) };
+        k.opt.r_max         = 8;
+        k.opt.radius_growth = growth;
+        run_case(k);
+        Case m{ "shadow edge, 16 spp, estimated, r_max 8, seed 45" + g,
+                synth::shadow_edge(W, H, { 16, 45 }) };
+        m.opt.r_max         = 8;
+        m.opt.radius_growth = growth;
+        run_case(m);
+        Case q{ "staircase, 64 spp, depth, estimated" + g,
+                synth::staircase(W, H, 9, { 64, 32 }) };
+        q.depth             = true;
+        q.opt.radius_growth = growth;
+        run_case(q);
+    }
+}
+
 TEST(FilterReference, VarianceGuideWinsOverHalves)
 {
     Case k{ "texture, variance + halves", synth::fine_texture(W, H, { 16, 14 }) };
