@@ -68,8 +68,8 @@ Layers (docs/LAYERS.md):
   --mode MODE          'layers': denoise each layer (lobe or specular depth)
                        with its own albedo, add the residual;
                        'beauty': denoise the beauty with the albedo. Default:
-                       layers when --layer is given, else beauty (the better
-                       on the public benchmark; docs/LAYERS.md).
+                       layers when --layer is given, else beauty (layers are
+                       better where lobe passes exist; docs/LAYERS.md).
   --layer NAME=RADIANCE:ALBEDO[:divided][:reflected]
                        A layer of the --in file (repeatable; replaces the
                        detected layers). RADIANCE and ALBEDO are channel
