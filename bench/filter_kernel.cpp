@@ -22,7 +22,7 @@
 
 namespace {
 
-constexpr int kSize = 192;
+constexpr int kSize = 128;
 
 /// The quotient (noisy / albedo) and guides of a scene, made once per case.
 struct KernelInput {

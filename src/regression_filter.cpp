@@ -27,6 +27,14 @@ constexpr double kEps       = 1e-8;
 constexpr float kValueClamp = 30.0f;
 constexpr double kMaxWm     = 1e6;
 
+/// Sums over the points of one row segment of a window, in powers of dx.
+struct RowSums {
+    double w[3]     = {};  ///< sum w {1, dx, dx^2}
+    double wz[3][2] = {};  ///< per channel: sum w z {1, dx}
+    double w2v[3]   = {};  ///< sum w^2 Vs {1, dx, dx^2}
+    int count       = 0;
+};
+
 /// Weighted moments of one least-squares plane fit, in window coordinates
 /// u = dx/R, v = dy/R.
 struct FitMoments {
@@ -35,28 +43,30 @@ struct FitMoments {
     double n[6] = {};     ///< sum w^2 Vs {1, u, v, uu, uv, vv}
     int count = 0;
 
-    void add(double w, double u, double v, const float* z, double vs)
+    /// Add the points of one row segment, given its sums over the points
+    /// in powers of dx (v = dy/R is the same for all of them, so the
+    /// moments in v follow from these: 13 sums per point instead of 22).
+    void add_row(const RowSums& r, double inv_r, double v)
     {
-        const double wu = w * u, wv = w * v;
-        s[0] += w;
-        s[1] += wu;
-        s[2] += wv;
-        s[3] += wu * u;
-        s[4] += wu * v;
-        s[5] += wv * v;
+        const double i2 = inv_r * inv_r;
+        s[0] += r.w[0];
+        s[1] += r.w[1] * inv_r;
+        s[2] += r.w[0] * v;
+        s[3] += r.w[2] * i2;
+        s[4] += r.w[1] * inv_r * v;
+        s[5] += r.w[0] * v * v;
         for (int ch = 0; ch < 3; ++ch) {
-            t[ch][0] += w * z[ch];
-            t[ch][1] += wu * z[ch];
-            t[ch][2] += wv * z[ch];
+            t[ch][0] += r.wz[ch][0];
+            t[ch][1] += r.wz[ch][1] * inv_r;
+            t[ch][2] += r.wz[ch][0] * v;
         }
-        const double w2v = w * w * vs, w2vu = w2v * u, w2vv = w2v * v;
-        n[0] += w2v;
-        n[1] += w2vu;
-        n[2] += w2vv;
-        n[3] += w2vu * u;
-        n[4] += w2vu * v;
-        n[5] += w2vv * v;
-        ++count;
+        n[0] += r.w2v[0];
+        n[1] += r.w2v[1] * inv_r;
+        n[2] += r.w2v[0] * v;
+        n[3] += r.w2v[2] * i2;
+        n[4] += r.w2v[1] * inv_r * v;
+        n[5] += r.w2v[0] * v * v;
+        count += r.count;
     }
 
     FitMoments& operator+=(const FitMoments& o)
@@ -134,6 +144,7 @@ solve(const FitMoments& m)
 /// The five planes of one window and what the splat needs of it.
 struct WindowFit {
     int radius  = 0;
+    int values  = 0;     ///< which WindowFitter::m_value holds its exp(-vt)
     float mean  = 0.0f;  ///< <z>: mean luminance of the window's points
     double eta  = 0.0;   ///< predicted relative noise at the centre
     Plane whole;
@@ -167,6 +178,8 @@ public:
         , m_side(2 * opt.r_max + 1)
         , m_g(size_t(m_side) * m_side, 0.0f)
         , m_fit_weight(size_t(m_side) * m_side, 0.0f)
+        , m_value { std::vector<float>(size_t(m_side) * m_side, 0.0f),
+                    std::vector<float>(size_t(m_side) * m_side, 0.0f) }
         , m_spatial(size_t(opt.r_max) + 1, 0.0f)
     {
     }
@@ -204,13 +217,15 @@ private:
                         kValueClamp);
     }
     /// Add the good points of row y, columns [xa, xb], to `m`.
+    /// `values` receives the value factor exp(-vt) of each good point.
     void accumulate(FitMoments& m, int R, int y, int xa, int xb, float mean,
-                    double& w2s2) const;
+                    double& w2s2, float* values) const;
     // noinline: the three stages stay separate in profiles
     // (docs/PERFORMANCE.md); a call per window or radius costs nothing.
     /// Extend the cached guide weights and point sums to radius R.
     [[gnu::noinline]] void grow_to(int R);
-    [[gnu::noinline]] WindowFit fit(int R);
+    /// Fit at radius R, keeping the value factors in m_value[values].
+    [[gnu::noinline]] WindowFit fit(int R, int values);
     bool edge_fires(const WindowFit& w) const;
     [[gnu::noinline]] void splat(const WindowFit& w);
 
@@ -225,6 +240,9 @@ private:
     /// g(q; p0) exp(-sigma(q)) for good fit points, 0 for the others: the
     /// part of the fit weight that does not change with R.
     std::vector<float> m_fit_weight;
+    /// exp(-vt(q)) of the good points at the last two radii fitted (the
+    /// splat of the final fit reuses them; an edge steps back one fit).
+    std::vector<float> m_value[2];
     std::vector<float> m_spatial;  ///< exp(-d^2/R^2), d = 0..R
     int m_x0 = 0, m_y0 = 0, m_grown = -1;
     double m_zsum = 0.0;  ///< sum of zl over fit points with g > 0
@@ -270,34 +288,52 @@ WindowFitter::grow_to(int R)
 
 void
 WindowFitter::accumulate(FitMoments& m, int R, int y, int xa, int xb,
-                         float mean, double& w2s2) const
+                         float mean, double& w2s2, float* values) const
 {
-    const int dy       = y - m_y0;
-    const double inv_r = 1.0 / R;
-    const double v     = dy * inv_r;
-    const float ey     = m_spatial[size_t(std::abs(dy))];
-    size_t i           = m_in.index(xa, y);
-    size_t c           = cache_index(xa - m_x0, dy);
+    if (xb < xa)
+        return;
+    const int dy   = y - m_y0;
+    const float ey = m_spatial[size_t(std::abs(dy))];
+    size_t i       = m_in.index(xa, y);
+    size_t c       = cache_index(xa - m_x0, dy);
+    RowSums r;
     for (int x = xa; x <= xb; ++x, ++i, ++c) {
         const float fw = m_fit_weight[c];
         if (!(fw > 0.0f))
             continue;
-        const int dx   = x - m_x0;
-        const float w  = fw * m_spatial[size_t(std::abs(dx))] * ey
-                        * std::exp(-value_exponent(m_in.zl[i], mean));
-        const double wd = w;
-        const double s  = m_in.sigma[i];
-        w2s2 += wd * wd * s * s;
-        m.add(wd, dx * inv_r, v, &m_in.z[3 * i], m_in.vs[i]);
+        const double dx    = x - m_x0;
+        const float value  = std::exp(-value_exponent(m_in.zl[i], mean));
+        values[c]          = value;
+        const double w     = fw * m_spatial[size_t(std::abs(x - m_x0))] * ey
+                             * value;
+        const double wdx   = w * dx;
+        const double sigma = m_in.sigma[i];
+        const float* z     = &m_in.z[3 * i];
+        const double w2v   = w * w * double(m_in.vs[i]);
+        r.w[0] += w;
+        r.w[1] += wdx;
+        r.w[2] += wdx * dx;
+        for (int ch = 0; ch < 3; ++ch) {
+            r.wz[ch][0] += w * z[ch];
+            r.wz[ch][1] += wdx * z[ch];
+        }
+        r.w2v[0] += w2v;
+        r.w2v[1] += w2v * dx;
+        r.w2v[2] += w2v * dx * dx;
+        w2s2 += w * w * sigma * sigma;
+        ++r.count;
     }
+    m.add_row(r, 1.0 / R, double(dy) / R);
 }
 
 
 WindowFit
-WindowFitter::fit(int R)
+WindowFitter::fit(int R, int value_buffer)
 {
     WindowFit wf;
     wf.radius = R;
+    wf.values = value_buffer;
+    float* values = m_value[value_buffer].data();
     wf.mean   = float(m_zsum / m_zcount);
     set_spatial(R);
     const ROI& img = m_in.image;
@@ -316,9 +352,9 @@ WindowFitter::fit(int R)
         const int left  = dy > 0 ? 1 : (dy < 0 ? 2 : 5);
         const int mid   = dy > 0 ? 4 : (dy < 0 ? 6 : 8);
         const int right = dy > 0 ? 0 : (dy < 0 ? 3 : 7);
-        accumulate(cell[left], R, y, xa, m_x0 - 1, wf.mean, w2s2);
-        accumulate(cell[mid], R, y, m_x0, m_x0, wf.mean, w2s2);
-        accumulate(cell[right], R, y, m_x0 + 1, xb, wf.mean, w2s2);
+        accumulate(cell[left], R, y, xa, m_x0 - 1, wf.mean, w2s2, values);
+        accumulate(cell[mid], R, y, m_x0, m_x0, wf.mean, w2s2, values);
+        accumulate(cell[right], R, y, m_x0 + 1, xb, wf.mean, w2s2, values);
     }
     static const int kQuadrantCells[4][4] = {
         { 0, 4, 7, 8 }, { 1, 4, 5, 8 }, { 2, 5, 6, 8 }, { 3, 6, 7, 8 }
@@ -365,6 +401,7 @@ WindowFitter::splat(const WindowFit& w)
     const int R        = w.radius;
     const double inv_r = 1.0 / R;
     const float power  = m_opt.quadrant_power;
+    const float* values = m_value[w.values].data();
     set_spatial(R);
     // Only output pixels receive.
     const int ya = std::max(m_y0 - R, m_out.ybegin);
@@ -386,8 +423,12 @@ WindowFitter::splat(const WindowFit& w)
             if (!(g > 0.0f))
                 continue;
             float s = g * m_spatial[size_t(std::abs(dx))] * ey;
-            if (cls & kFitPoint)
-                s *= std::exp(-value_exponent(m_in.zl[i], w.mean));
+            if (cls & kFitPoint) {
+                const size_t c = cache_index(dx, dy);
+                s *= m_fit_weight[c] > 0.0f
+                         ? values[c]
+                         : std::exp(-value_exponent(m_in.zl[i], w.mean));
+            }
             const int qi   = dx >= 0 ? (dy >= 0 ? 0 : 3) : (dy >= 0 ? 1 : 2);
             const Plane& quad = w.quadrant[qi];
             const double u    = dx * inv_r;
@@ -435,9 +476,10 @@ WindowFitter::process(int x0, int y0, int& radius)
 
     WindowFit previous, current;
     StopReason reason = StopReason::Size;
+    int fits = 0;
     for (int R = m_opt.r_min;; R = next_radius(R)) {
         grow_to(R);
-        current = fit(R);
+        current = fit(R, fits++ & 1);
         if (edge_fires(current)) {
             reason = StopReason::Edge;
             if (R > m_opt.r_min)
