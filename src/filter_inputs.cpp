@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include <OpenImageIO/imagebufalgo_util.h>
 
@@ -98,7 +99,8 @@ decode_filter_inputs(FilterInputs& in, ImageBuf& dst, const ImageBuf& quotient,
     in.height          = region.height();
     const size_t npix  = region.npixels();
 
-    in.z                   = read_channels(quotient, region, 0, 3);
+    // The RGB quotient, 3 per pixel: kept as zfit for the fit points.
+    const std::vector<float> z = read_channels(quotient, region, 0, 3);
     std::vector<float> alb = read_channels(albedo, region, 0, 3);
     std::vector<float> alpha;
     const int alpha_ch = quotient.spec().alpha_channel;
@@ -168,18 +170,18 @@ decode_filter_inputs(FilterInputs& in, ImageBuf& dst, const ImageBuf& quotient,
             uint8_t cls  = surface ? kSurface : 0;
             bool all_fit = surface;
             for (int c = 0; c < 3; ++c) {
-                const bool finite = std::isfinite(in.z[3 * i + c]);
+                const bool finite = std::isfinite(z[3 * i + c]);
                 if (!finite)
                     cls |= kNonFinite;
                 const bool demod = albedo_demodulated(alb[3 * i + c], eps_a);
                 if (surface && demod)
                     cls |= uint8_t(kReceiveR << c);
                 all_fit = all_fit && demod
-                          && std::fabs(in.z[3 * i + c]) <= kLargestFitQuotient;
+                          && std::fabs(z[3 * i + c]) <= kLargestFitQuotient;
             }
             if (all_fit) {
                 cls |= kFitPoint;
-                const float* zp = &in.z[3 * i];
+                const float* zp = &z[3 * i];
                 in.zl[i] = kLumaWeights[0] * zp[0] + kLumaWeights[1] * zp[1]
                            + kLumaWeights[2] * zp[2];
             }
@@ -306,6 +308,27 @@ decode_filter_inputs(FilterInputs& in, ImageBuf& dst, const ImageBuf& quotient,
             in.sigma[i]    = std::sqrt(vs) / std::max(std::fabs(zs), kEps);
         }
     });
+
+    // The fit's planes, padded for the row kernels (kPlanePadding).
+    for (int c = 0; c < 3; ++c)
+        in.zfit[c].assign(npix + kPlanePadding, 0.0f);
+    in.fit_prior.assign(npix + kPlanePadding, 0.0f);
+    for_rows(region, nthreads, [&](int y) {
+        for (size_t i = in.index(region.xbegin, y), e = i + in.width; i < e;
+             ++i) {
+            if (!fit(i))
+                continue;
+            for (int c = 0; c < 3; ++c)
+                in.zfit[c][i] = z[3 * i + c];
+            if (in.sigma[i] <= opt.sigma_good)
+                in.fit_prior[i] = std::exp(-in.sigma[i]);
+        }
+    });
+    in.zl.resize(npix + kPlanePadding, 0.0f);
+    in.vs.resize(npix + kPlanePadding, 0.0f);
+    in.sigma.resize(npix + kPlanePadding, 0.0f);
+    in.cls.resize(npix + kPlanePadding, 0);
+    in.zeros.assign(3 * (size_t(in.width) + kPlanePadding), 0.0f);
     return true;
 }
 
@@ -316,6 +339,8 @@ GuideWeight::centre(int x0, int y0)
     m_x0 = x0;
     m_y0 = y0;
     m_i0 = m_in.index(x0, y0);
+    if (m_in.id_pairs == -1)
+        m_id0 = m_in.ids[m_i0];
     if (m_in.invdepth.empty())
         return;
     m_zeta0 = m_in.invdepth[m_i0];
@@ -344,61 +369,177 @@ GuideWeight::centre(int x0, int y0)
 }
 
 
-float
-GuideWeight::operator()(int x, int y) const
+namespace {
+
+/// What the guide weight of a row needs of its centre.
+struct GuideCentre {
+    float n0[3];           ///< the centre's normal (0: none)
+    float zeta0, gx, gy;   ///< its inverse depth and the plane's slopes
+    float depth_tolerance;
+    float normal_cut;
+    uint32_t id0;          ///< its plain id's bits
+    float dx0, dy;         ///< offset of the row's first pixel
+};
+
+/// g of section 4 for n pixels, before the normal power and Cryptomatte
+/// coverage: d (the normals' cosine, 1 where neither has one) where every
+/// test passes, else 0. Each test is its own select: GCC 12 vectorises
+/// these, not a conjunction of them.
+template<bool kDepth, bool kPlainId>
+[[gnu::always_inline]] inline void
+guide_lanes(const uint32_t* __restrict cls, const float* __restrict normal,
+            const float* __restrict invdepth, const float* __restrict ids,
+            float* __restrict g, int n, const GuideCentre& c)
+{
+    // A decoded normal is a unit vector or all zero (none).
+    const bool none0 = c.n0[0] * c.n0[0] + c.n0[1] * c.n0[1]
+                           + c.n0[2] * c.n0[2]
+                       == 0.0f;
+    for (int q = 0; q < n; ++q) {
+        const float nx = normal[3 * q], ny = normal[3 * q + 1],
+                    nz = normal[3 * q + 2];
+        const bool none = nx * nx + ny * ny + nz * nz == 0.0f;
+        // Unit vectors, but rounding can put d a hair above 1, which a
+        // large normal_power turns into Inf.
+        const float d = std::min(1.0f, nx * c.n0[0] + ny * c.n0[1]
+                                           + nz * c.n0[2]);
+        const float with_normal = d > c.normal_cut ? d : 0.0f;
+        float w = none0 ? (none ? 1.0f : 0.0f) : (none ? 0.0f : with_normal);
+        if (kDepth) {
+            const float zhat = c.zeta0 + c.gx * (c.dx0 + float(q))
+                               + c.gy * c.dy;
+            w = zhat > 0.0f ? w : 0.0f;
+            w = std::fabs(invdepth[q] - zhat) <= c.depth_tolerance * zhat
+                    ? w
+                    : 0.0f;
+        }
+        if (kPlainId) {
+            uint32_t id;
+            std::memcpy(&id, &ids[q], sizeof id);
+            w = id == c.id0 ? w : 0.0f;
+        }
+        g[q] = (cls[q] & kSurface) ? w : 0.0f;
+    }
+}
+
+ZDENOISE_ROW_KERNEL void
+guide_row(const uint32_t* __restrict cls, const float* __restrict normal,
+          const float* __restrict invdepth, const float* __restrict ids,
+          float* __restrict g, int n, const GuideCentre& c, bool depth,
+          bool plain_id)
+{
+    if (depth && plain_id)
+        guide_lanes<true, true>(cls, normal, invdepth, ids, g, n, c);
+    else if (depth)
+        guide_lanes<true, false>(cls, normal, invdepth, ids, g, n, c);
+    else if (plain_id)
+        guide_lanes<false, true>(cls, normal, invdepth, ids, g, n, c);
+    else
+        guide_lanes<false, false>(cls, normal, invdepth, ids, g, n, c);
+}
+
+/// Multiply g by the Cryptomatte overlap of each pixel with the centre p0:
+/// the sum over equal ids of the smaller normalised coverage, at most 1 (1
+/// where neither has coverage, 0 where one has none). Coverages are >= 0,
+/// so a rank without coverage adds min(c, 0) = 0 and needs no test. K > 0
+/// is k known when compiling (its loops unroll and the pixels vectorise).
+template<int K>
+[[gnu::always_inline]] inline void
+coverage_lanes(const float* __restrict ids, const float* __restrict p0,
+               float* __restrict g, int n, int k)
+{
+    static_assert(K <= 4, "the centre's ranks are held in registers");
+    const int kk = K > 0 ? K : k;
+    uint32_t id0[4] = {};
+    float c0[4]     = {};
+    float cover0    = 0.0f;
+    for (int b = 0; b < kk; ++b) {
+        if (K > 0) {
+            std::memcpy(&id0[b], &p0[2 * b], sizeof(uint32_t));
+            c0[b] = p0[2 * b + 1];
+        }
+        cover0 += p0[2 * b + 1];
+    }
+    // The centre's rank b (from p0 itself when k is not known).
+    auto centre_id = [&](int b) {
+        uint32_t id = id0[K > 0 ? b : 0];
+        if (K == 0)
+            std::memcpy(&id, &p0[2 * b], sizeof id);
+        return id;
+    };
+    auto centre_cover = [&](int b) {
+        return K > 0 ? c0[b] : p0[2 * b + 1];
+    };
+    for (int q = 0; q < n; ++q) {
+        const float* p = &ids[size_t(2 * kk) * size_t(q)];
+        float overlap = 0.0f, cover = 0.0f;
+        for (int a = 0; a < kk; ++a) {
+            const float ca = p[2 * a + 1];
+            uint32_t ida;
+            std::memcpy(&ida, &p[2 * a], sizeof ida);
+            cover += ca;
+            for (int b = 0; b < kk; ++b)
+                overlap += ida == centre_id(b) ? std::min(ca, centre_cover(b))
+                                               : 0.0f;
+        }
+        const float none = cover == 0.0f ? 1.0f : 0.0f;
+        overlap = cover0 == 0.0f ? none : (cover == 0.0f ? 0.0f : overlap);
+        g[q] *= std::min(overlap, 1.0f);
+    }
+}
+
+ZDENOISE_ROW_KERNEL void
+coverage_row(const float* __restrict ids, const float* __restrict p0,
+             float* __restrict g, int n, int k)
+{
+    switch (k) {
+    case 1: coverage_lanes<1>(ids, p0, g, n, k); break;
+    case 2: coverage_lanes<2>(ids, p0, g, n, k); break;
+    case 3: coverage_lanes<3>(ids, p0, g, n, k); break;
+    default: coverage_lanes<0>(ids, p0, g, n, k); break;
+    }
+}
+
+}  // namespace
+
+
+void
+GuideWeight::row(int x, int y, int n, float* g) const
 {
     const size_t i = m_in.index(x, y);
-    float g        = 1.0f;
-    if (!m_in.normal.empty()) {
-        const float* n  = &m_in.normal[3 * i];
-        const float* n0 = &m_in.normal[3 * m_i0];
-        const bool z    = no_normal(n), z0 = no_normal(n0);
-        if (z != z0)
-            return 0.0f;
-        if (!z) {
-            // Unit vectors, but rounding can put d a hair above 1, which
-            // a large normal_power turns into Inf (and the weights NaN).
-            const float d = std::min(
-                1.0f, n[0] * n0[0] + n[1] * n0[1] + n[2] * n0[2]);
-            if (!(d > m_cut))
-                return 0.0f;
-            if (m_power == 4.0f) {
-                const float d2 = d * d;
-                g              = d2 * d2;
-            } else {
-                g = std::pow(d, m_power);
-            }
+    GuideCentre c;
+    const bool normals = !m_in.normal.empty();
+    for (int k = 0; k < 3; ++k)
+        c.n0[k] = normals ? m_in.normal[3 * m_i0 + size_t(k)] : 0.0f;
+    c.zeta0           = m_zeta0;
+    c.gx              = m_gx;
+    c.gy              = m_gy;
+    c.depth_tolerance = m_depth_tol;
+    c.normal_cut      = m_cut;
+    std::memcpy(&c.id0, &m_id0, sizeof c.id0);
+    c.dx0 = float(x - m_x0);
+    c.dy  = float(y - m_y0);
+    // Absent guides read the zero plane: no normal anywhere gives d = 1.
+    const float* zeros = m_in.zeros.data();
+    const bool depth   = !m_in.invdepth.empty();
+    const bool plain   = m_in.id_pairs == -1;
+    guide_row(&m_in.cls[i], normals ? &m_in.normal[3 * i] : zeros,
+              depth ? &m_in.invdepth[i] : zeros, plain ? &m_in.ids[i] : zeros,
+              g, n, c, depth, plain);
+    if (m_power == 4.0f) {
+        for (int q = 0; q < n; ++q) {
+            const float d2 = g[q] * g[q];
+            g[q]           = d2 * d2;
         }
+    } else {
+        for (int q = 0; q < n; ++q)
+            if (g[q] > 0.0f)
+                g[q] = std::pow(g[q], m_power);
     }
-    if (!m_in.invdepth.empty()) {
-        const float zhat = m_zeta0 + m_gx * float(x - m_x0)
-                           + m_gy * float(y - m_y0);
-        if (!(zhat > 0.0f)
-            || std::fabs(m_in.invdepth[i] - zhat) > m_depth_tol * zhat)
-            return 0.0f;
-    }
-    if (m_in.id_pairs == -1) {
-        if (!same_id(m_in.ids[i], m_in.ids[m_i0]))
-            return 0.0f;
-    } else if (m_in.id_pairs > 0) {
-        const int k     = m_in.id_pairs;
-        const float* p  = &m_in.ids[size_t(2 * k) * i];
-        const float* p0 = &m_in.ids[size_t(2 * k) * m_i0];
-        float overlap = 0.0f, cover = 0.0f, cover0 = 0.0f;
-        for (int a = 0; a < k; ++a) {
-            cover += p[2 * a + 1];
-            cover0 += p0[2 * a + 1];
-            if (p[2 * a + 1] <= 0.0f)
-                continue;
-            for (int b = 0; b < k; ++b)
-                if (p0[2 * b + 1] > 0.0f && same_id(p[2 * a], p0[2 * b]))
-                    overlap += std::min(p[2 * a + 1], p0[2 * b + 1]);
-        }
-        if (cover == 0.0f || cover0 == 0.0f)
-            overlap = (cover == 0.0f && cover0 == 0.0f) ? 1.0f : 0.0f;
-        g *= std::min(overlap, 1.0f);
-    }
-    return g;
+    if (m_in.id_pairs > 0)
+        coverage_row(&m_in.ids[size_t(2 * m_in.id_pairs) * i],
+                     &m_in.ids[size_t(2 * m_in.id_pairs) * m_i0], g, n,
+                     m_in.id_pairs);
 }
 
 }  // namespace detail

@@ -43,17 +43,43 @@ no_normal(const float* n)
     return n[0] == 0.0f && n[1] == 0.0f && n[2] == 0.0f;
 }
 
+/// The filter's row kernels are built twice, for the baseline x86-64 and for
+/// AVX2 (x86-64-v3), and the loader picks one for the CPU. Their sources
+/// are compiled without FMA contraction and sum in a fixed order, so both
+/// builds compute the same floats (src/CMakeLists.txt).
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#    define ZDENOISE_ROW_KERNEL \
+        __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#    define ZDENOISE_ROW_KERNEL
+#endif
+
+/// Points per block of the row kernels' lanes.
+constexpr int kLanes = 8;
+
+/// Elements past the last pixel of the planes the filter's row kernels read
+/// (zl, vs, sigma, cls, zfit): a kernel reads whole blocks of lanes, past a
+/// row segment's end, and masks what lies beyond it.
+constexpr size_t kPlanePadding = 16;
+
 /// The decoded filter input over `region` (row-major, `width` pixels a row).
 struct FilterInputs {
     ROI region;          ///< pixels held (within the image's data window)
     ROI image;           ///< the whole image (FilterOptions::frame)
     int width = 0, height = 0;
 
-    std::vector<float> z;      ///< RGB quotient, 3 per pixel
     std::vector<float> zl;     ///< luminance of z (fit points)
-    std::vector<uint8_t> cls;  ///< PixelClass bits
+    /// PixelClass bits, 32 bits wide so that the filter kernels read them
+    /// in lanes as wide as their floats.
+    std::vector<uint32_t> cls;
     std::vector<float> sigma;  ///< relative noise of zl (fit points)
     std::vector<float> vs;     ///< smoothed variance of zl (fit points)
+    /// exp(-sigma) of the good fit points (sigma <= sigma_good), 0 at the
+    /// others: the part of a point's fit weight that no window changes.
+    std::vector<float> fit_prior;
+    /// z of the fit points, one plane per channel, 0 at other pixels: what
+    /// the fit reads, contiguous along a row and always finite.
+    std::vector<float> zfit[3];
 
     // Guides (empty when not given).
     std::vector<float> normal;    ///< unit normal, 3 per pixel; 0 = none
@@ -61,6 +87,9 @@ struct FilterInputs {
     int id_pairs = 0;             ///< 0: no id, -1: plain id, k: k pairs
     std::vector<float> ids;       ///< plain: 1/pixel; pairs: 2k/pixel
                                   ///< (id, normalised coverage)
+    /// Zeros for three floats a pixel of a row and padding: what the guide
+    /// kernel reads for a guide that is not given.
+    std::vector<float> zeros;
 
     size_t index(int x, int y) const
     {
@@ -98,7 +127,16 @@ public:
     void centre(int x0, int y0);
 
     /// g(q; p0) for a surface pixel q = (x, y).
-    float operator()(int x, int y) const;
+    float operator()(int x, int y) const
+    {
+        float g;
+        row(x, y, 1, &g);
+        return g;
+    }
+
+    /// g(q; p0) of the n pixels from (x, y) along row y into g[0, n), 0 for
+    /// pixels that are no surface.
+    void row(int x, int y, int n, float* g) const;
 
 private:
     const FilterInputs& m_in;
@@ -106,6 +144,7 @@ private:
     int m_x0 = 0, m_y0 = 0;
     size_t m_i0 = 0;
     float m_zeta0 = 0, m_gx = 0, m_gy = 0;
+    float m_id0 = 0;  ///< the centre's plain id
 };
 
 }  // namespace detail

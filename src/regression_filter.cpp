@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <mutex>
 
 #include <OpenImageIO/imagebufalgo_util.h>
@@ -27,13 +28,230 @@ constexpr double kEps       = 1e-8;
 constexpr float kValueClamp = 30.0f;
 constexpr double kMaxWm     = 1e6;
 
-/// Sums over the points of one row segment of a window, in powers of dx.
-struct RowSums {
-    double w[3]     = {};  ///< sum w {1, dx, dx^2}
-    double wz[3][2] = {};  ///< per channel: sum w z {1, dx}
-    double w2v[3]   = {};  ///< sum w^2 Vs {1, dx, dx^2}
-    int count       = 0;
+/// exp(-t) for t in [0, kValueClamp] (NaN gives 1), branch-free so that it
+/// vectorises: Cephes' expf reduction and polynomial, relative error within
+/// 2e-7 like libm's expf.
+[[gnu::always_inline]] inline float
+exp_neg(float t)
+{
+    t              = t > 0.0f ? (t < kValueClamp ? t : kValueClamp) : 0.0f;
+    const float x  = -t;
+    // round(x log2(e)) by the 1.5 * 2^23 trick (no SSE4.1 round needed)
+    const float fn = (x * 1.44269504088896341f + 12582912.0f) - 12582912.0f;
+    const float r  = (x - fn * 0.693359375f) - fn * -2.12194440e-4f;
+    float p        = 1.9875691500e-4f;
+    p              = p * r + 1.3981999507e-3f;
+    p              = p * r + 8.3334519073e-3f;
+    p              = p * r + 4.1665795894e-2f;
+    p              = p * r + 1.6666665459e-1f;
+    p              = p * r + 5.0000001201e-1f;
+    const float e  = p * (r * r) + r + 1.0f;
+    const uint32_t bits = uint32_t(int(fn) + 127) << 23;  // 2^fn, fn in [-44, 0]
+    float scale;
+    std::memcpy(&scale, &bits, sizeof scale);
+    return e * scale;
+}
+
+/// The sums of one cell of a window's fit (section 5), kLanes partial sums
+/// each, in pixel offsets dx, dy from the centre (window coordinates u =
+/// dx/R, v = dy/R are applied once, in double, by FitMoments::add).
+struct CellLanes {
+    enum Sum {
+        W, Wx, Wy, Wxx, Wxy, Wyy,  ///< w {1, dx, dy, dx^2, dx dy, dy^2}
+        Z0, Z0x, Z0y, Z1, Z1x, Z1y, Z2, Z2x, Z2y,  ///< w z_c {1, dx, dy}
+        N, Nx, Ny, Nxx, Nxy, Nyy,  ///< w^2 Vs {1, dx, dy, ...}
+        S2,                        ///< w^2 sigma^2
+        Count,                     ///< good points
+        kSums
+    };
+    float lane[kSums][kLanes];
 };
+
+/// One row segment of a window for the fit: pointers at its first point.
+struct FitRow {
+    int n;              ///< points in the segment
+    float dx0, dy;      ///< offset of the first point
+    float ey;           ///< e(dy)
+    float mean;         ///< <z>
+    float value_scale;  ///< value_k / max(|<z>|, eps)
+};
+
+/// Add the points of one row segment to a cell, kLanes at a time; store
+/// each point's value factor exp(-vt) in `values` (whole blocks: the
+/// buffers are padded, and a store past the segment lands where a later
+/// segment writes or nobody reads).
+ZDENOISE_ROW_KERNEL void
+fit_row(const float* __restrict fit_weight, const float* __restrict spatial,
+        const float* __restrict zl, const float* __restrict z0,
+        const float* __restrict z1, const float* __restrict z2,
+        const float* __restrict vs, const float* __restrict sigma,
+        float* __restrict values, CellLanes* __restrict cell,
+        const FitRow& in)
+{
+    using S = CellLanes;
+    const float dy = in.dy, ey = in.ey, mean = in.mean;
+    const float value_scale = in.value_scale;
+    const int n = in.n;
+    for (int j = 0; j < n; j += kLanes) {
+        for (int l = 0; l < kLanes; ++l) {
+            // Every load unconditional, selects instead of branches: the
+            // lanes vectorise.
+            const int q       = j + l;
+            const float fw    = fit_weight[q];
+            const float sp    = spatial[q];
+            const float vsq   = vs[q];
+            const float sgq   = sigma[q];
+            const float value = exp_neg(value_scale * std::fabs(zl[q] - mean));
+            values[q]         = value;
+            const bool use    = q < n && fw > 0.0f;
+            const float w   = use ? fw * sp * ey * value : 0.0f;
+            const float w2v = w * w * (use ? vsq : 0.0f);
+            const float sg  = use ? sgq : 0.0f;
+            const float dx  = in.dx0 + float(q);
+            const float wx = w * dx, wy = w * dy;
+            S& c = *cell;
+            c.lane[S::W][l] += w;
+            c.lane[S::Wx][l] += wx;
+            c.lane[S::Wy][l] += wy;
+            c.lane[S::Wxx][l] += wx * dx;
+            c.lane[S::Wxy][l] += wx * dy;
+            c.lane[S::Wyy][l] += wy * dy;
+            const float zc[3] = { z0[q], z1[q], z2[q] };
+#pragma GCC unroll 3
+            for (int ch = 0; ch < 3; ++ch) {
+                c.lane[S::Z0 + 3 * ch][l] += w * zc[ch];
+                c.lane[S::Z0x + 3 * ch][l] += wx * zc[ch];
+                c.lane[S::Z0y + 3 * ch][l] += wy * zc[ch];
+            }
+            const float nx = w2v * dx, ny = w2v * dy;
+            c.lane[S::N][l] += w2v;
+            c.lane[S::Nx][l] += nx;
+            c.lane[S::Ny][l] += ny;
+            c.lane[S::Nxx][l] += nx * dx;
+            c.lane[S::Nxy][l] += nx * dy;
+            c.lane[S::Nyy][l] += ny * dy;
+            c.lane[S::S2][l] += w * w * sg * sg;
+            c.lane[S::Count][l] += use ? 1.0f : 0.0f;
+        }
+    }
+}
+
+/// A solved plane's coefficients as floats, for the splat kernel.
+struct PlaneCoeffs {
+    float c[3] = {}, a[3] = {}, b[3] = {};
+};
+
+/// One row segment of a window's splat, all of it in one quadrant:
+/// pointers at its first point.
+struct SplatRow {
+    const uint32_t* cls;
+    const float* g;           ///< cached guide weights
+    const float* spatial;     ///< e(dx)
+    const float* fit_weight;  ///< cached; > 0 where `values` holds exp(-vt)
+    const float* values;
+    const float* zl;
+    int n;
+    float dx0, ey, inv_r, v;  ///< dx of the first point, e(dy), 1/R, dy/R
+    float mean, value_scale;  ///< for exp(-vt) where the fit did not keep it
+    PlaneCoeffs whole, quadrant;  ///< quadrant = whole where it has none
+    float* s;     ///< receives each point's weight (0: receives nothing)
+    float* a[3];  ///< receives weight times the blended plane value A
+};
+
+/// The splat weights and values of section 7 for one segment; kPower8 when
+/// quadrant_power is 8 (the default: r^8 by multiplication vectorises,
+/// std::pow does not).
+// The pointers of a SplatRow again, as __restrict parameters: GCC gives up
+// vectorising when it must check at run time that more than ten of them do
+// not overlap, and only parameters carry restrict reliably.
+#define ZDENOISE_SPLAT_POINTERS                                               \
+    const uint32_t *__restrict cls, const float *__restrict gw,                \
+        const float *__restrict fitw, const float *__restrict values,          \
+        const float *__restrict spat, const float *__restrict zl,              \
+        float *__restrict out_s, float *__restrict a0, float *__restrict a1,   \
+        float *__restrict a2
+#define ZDENOISE_SPLAT_ARGS(in)                                                \
+    in.cls, in.g, in.fit_weight, in.values, in.spatial, in.zl, in.s, in.a[0], \
+        in.a[1], in.a[2]
+
+template<bool kPower8>
+[[gnu::always_inline]] inline void
+splat_lanes(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
+{
+    float* const out_a[3] = { a0, a1, a2 };
+    const PlaneCoeffs P = in.whole, Q = in.quadrant;
+    const float ey = in.ey, inv_r = in.inv_r, v = in.v, dx0 = in.dx0;
+    const float mean = in.mean, value_scale = in.value_scale;
+    const int n = in.n;
+    // No sums across points here: a plain loop, vectorised at whatever
+    // width, computes every point alike.
+    for (int q = 0; q < n; ++q) {
+        {
+            const uint32_t cl = cls[q];
+            const float g    = gw[q];
+            const float fw   = fitw[q];
+            const float kept = values[q];
+            const float sp   = spat[q];
+            // Receiving implies a surface (section 2). One bit test per
+            // condition: GCC 12 vectorises no bitwise and of two of them.
+            const bool use = (cl & kReceiveAny) && g > 0.0f;
+            const bool fit = (cl & kFitPoint) != 0;
+            const float fresh = exp_neg(value_scale * std::fabs(zl[q] - mean));
+            const float value = fit ? (fw > 0.0f ? kept : fresh) : 1.0f;
+            const float s = use ? g * sp * ey * value : 0.0f;
+            const float u = (dx0 + float(q)) * inv_r;
+#pragma GCC unroll 3
+            for (int ch = 0; ch < 3; ++ch) {
+                const float Z  = P.c[ch] + P.a[ch] * u + P.b[ch] * v;
+                const float Zm = Q.c[ch] + Q.a[ch] * u + Q.b[ch] * v;
+                float r = (std::fabs(Z) + float(kEps))
+                          / (std::fabs(Zm) + float(kEps));
+                r = std::max(r, 1.0f / r);
+                float wm;
+                if (kPower8) {
+                    const float r2 = r * r, r4 = r2 * r2;
+                    wm = r4 * r4;
+                } else {
+                    wm = std::pow(r, power);
+                }
+                wm = std::min(wm, float(kMaxWm));
+                const bool opposite = (Z < 0.0f && Zm > 0.0f)
+                                      || (Z > 0.0f && Zm < 0.0f);
+                wm = opposite ? float(kMaxWm) : wm;
+                // Without a quadrant plane Q is the whole one: Zm = Z, wm = 1
+                // and A = (Z + Z) / 2 = Z exactly.
+                out_a[ch][q] = s * ((Z + wm * Zm) / (1.0f + wm));
+            }
+            out_s[q] = s;
+        }
+    }
+}
+
+ZDENOISE_ROW_KERNEL void
+splat_row_power8(ZDENOISE_SPLAT_POINTERS, const SplatRow& in)
+{
+    splat_lanes<true>(cls, gw, fitw, values, spat, zl, out_s, a0, a1, a2, in,
+                      8.0f);
+}
+
+void
+splat_row(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
+{
+    splat_lanes<false>(cls, gw, fitw, values, spat, zl, out_s, a0, a1, a2, in,
+                       power);
+}
+
+/// The splat of one row segment, by the kernel that fits quadrant_power.
+void
+splat_row(const SplatRow& in, float power)
+{
+    if (power == 8.0f)
+        splat_row_power8(ZDENOISE_SPLAT_ARGS(in), in);
+    else
+        splat_row(ZDENOISE_SPLAT_ARGS(in), in, power);
+}
+#undef ZDENOISE_SPLAT_POINTERS
+#undef ZDENOISE_SPLAT_ARGS
 
 /// Weighted moments of one least-squares plane fit, in window coordinates
 /// u = dx/R, v = dy/R.
@@ -43,30 +261,34 @@ struct FitMoments {
     double n[6] = {};     ///< sum w^2 Vs {1, u, v, uu, uv, vv}
     int count = 0;
 
-    /// Add the points of one row segment, given its sums over the points
-    /// in powers of dx (v = dy/R is the same for all of them, so the
-    /// moments in v follow from these: 13 sums per point instead of 22).
-    void add_row(const RowSums& r, double inv_r, double v)
+    /// Set from a cell's lane sums (in pixel offsets) for radius R; also
+    /// returns the cell's sum of w^2 sigma^2. The lanes are added as a
+    /// fixed tree (l + l+4, then + l+2, then + l+1), which vectorises.
+    double set(const CellLanes& c, int R)
     {
-        const double i2 = inv_r * inv_r;
-        s[0] += r.w[0];
-        s[1] += r.w[1] * inv_r;
-        s[2] += r.w[0] * v;
-        s[3] += r.w[2] * i2;
-        s[4] += r.w[1] * inv_r * v;
-        s[5] += r.w[0] * v * v;
-        for (int ch = 0; ch < 3; ++ch) {
-            t[ch][0] += r.wz[ch][0];
-            t[ch][1] += r.wz[ch][1] * inv_r;
-            t[ch][2] += r.wz[ch][0] * v;
+        using S = CellLanes;
+        static_assert(kLanes == 8, "the tree below adds eight lanes");
+        float half[S::kSums][4], quarter[S::kSums][2];
+        for (int k = 0; k < S::kSums; ++k)
+            for (int l = 0; l < 4; ++l)
+                half[k][l] = c.lane[k][l] + c.lane[k][l + 4];
+        for (int k = 0; k < S::kSums; ++k)
+            for (int l = 0; l < 2; ++l)
+                quarter[k][l] = half[k][l] + half[k][l + 2];
+        double sum[S::kSums];
+        for (int k = 0; k < S::kSums; ++k)
+            sum[k] = double(quarter[k][0] + quarter[k][1]);
+        const double i1 = 1.0 / R, i2 = i1 * i1;
+        const double scale[6] = { 1.0, i1, i1, i2, i2, i2 };
+        for (int k = 0; k < 6; ++k) {
+            s[k] = sum[S::W + k] * scale[k];
+            n[k] = sum[S::N + k] * scale[k];
         }
-        n[0] += r.w2v[0];
-        n[1] += r.w2v[1] * inv_r;
-        n[2] += r.w2v[0] * v;
-        n[3] += r.w2v[2] * i2;
-        n[4] += r.w2v[1] * inv_r * v;
-        n[5] += r.w2v[0] * v * v;
-        count += r.count;
+        for (int ch = 0; ch < 3; ++ch)
+            for (int k = 0; k < 3; ++k)
+                t[ch][k] = sum[S::Z0 + 3 * ch + k] * scale[k];
+        count = int(sum[S::Count]);
+        return sum[S::S2];
     }
 
     FitMoments& operator+=(const FitMoments& o)
@@ -153,16 +375,16 @@ struct WindowFit {
 
 enum class StopReason { Quality, Size, Edge };
 
-/// Statistics of one strip, summed in strip order so that totals do not
+/// Statistics of one block of centres, summed in block order so that totals do not
 /// depend on the thread count.
-struct StripStats {
+struct BlockStats {
     int64_t windows = 0, stop_quality = 0, stop_size = 0, stop_edge = 0;
     int64_t radius_sum = 0;
 };
 
 
 /// Grows, fits and splats the windows of the centres of a range of rows.
-/// One per strip: holds the per-centre scratch (guide weights of the
+/// One per block of centres: holds the per-centre scratch (guide weights of the
 /// window) so that nothing is allocated per pixel.
 class WindowFitter {
 public:
@@ -176,11 +398,16 @@ public:
         , m_wsum(wsum)
         , m_guide(in, opt)
         , m_side(2 * opt.r_max + 1)
-        , m_g(size_t(m_side) * m_side, 0.0f)
-        , m_fit_weight(size_t(m_side) * m_side, 0.0f)
-        , m_value { std::vector<float>(size_t(m_side) * m_side, 0.0f),
-                    std::vector<float>(size_t(m_side) * m_side, 0.0f) }
-        , m_spatial(size_t(opt.r_max) + 1, 0.0f)
+        , m_g(cache_size(), 0.0f)
+        , m_fit_weight(cache_size(), 0.0f)
+        , m_value { std::vector<float>(cache_size(), 0.0f),
+                    std::vector<float>(cache_size(), 0.0f) }
+        , m_spatial_row(size_t(m_side) + kLanes, 0.0f)
+        , m_cells(9)
+        , m_splat_s(size_t(m_side) + kLanes, 0.0f)
+        , m_splat_a { std::vector<float>(size_t(m_side) + kLanes, 0.0f),
+                      std::vector<float>(size_t(m_side) + kLanes, 0.0f),
+                      std::vector<float>(size_t(m_side) + kLanes, 0.0f) }
     {
     }
 
@@ -196,30 +423,27 @@ public:
     }
 
 private:
+    /// The caches hold the largest window and kLanes of padding (the row
+    /// kernels read whole blocks of lanes).
+    size_t cache_size() const { return size_t(m_side) * m_side + kLanes; }
     size_t cache_index(int dx, int dy) const
     {
         return size_t(dy + m_opt.r_max) * m_side + (dx + m_opt.r_max);
     }
     float& g_at(int dx, int dy) { return m_g[cache_index(dx, dy)]; }
-    /// Fill m_spatial for radius R: exp(-(dx^2+dy^2)/R^2) = e(dx) e(dy).
+    /// Fill m_spatial_row for radius R: exp(-d^2/R^2) at index d + R.
     void set_spatial(int R)
     {
-        m_spatial.resize(size_t(R) + 1);
         for (int d = 0; d <= R; ++d)
-            m_spatial[size_t(d)] = std::exp(-float(d * d) / float(R * R));
+            m_spatial_row[size_t(R + d)] = m_spatial_row[size_t(R - d)]
+                = std::exp(-float(d * d) / float(R * R));
     }
-    /// The value term's exponent k |zl - <z>| / |<z>|, clamped so that
-    /// weights never underflow.
-    float value_exponent(float zl, float mean) const
+    /// The value term's exponent is value_scale(<z>) |zl - <z>| (clamped
+    /// in exp_neg so that weights never underflow).
+    float value_scale(float mean) const
     {
-        const float am = std::max(std::fabs(mean), float(kEps));
-        return std::min(m_opt.value_k * std::fabs(zl - mean) / am,
-                        kValueClamp);
+        return m_opt.value_k / std::max(std::fabs(mean), float(kEps));
     }
-    /// Add the good points of row y, columns [xa, xb], to `m`.
-    /// `values` receives the value factor exp(-vt) of each good point.
-    void accumulate(FitMoments& m, int R, int y, int xa, int xb, float mean,
-                    double& w2s2, float* values) const;
     // noinline: the three stages stay separate in profiles
     // (docs/PERFORMANCE.md); a call per window or radius costs nothing.
     /// Extend the cached guide weights and point sums to radius R.
@@ -243,7 +467,12 @@ private:
     /// exp(-vt(q)) of the good points at the last two radii fitted (the
     /// splat of the final fit reuses them; an edge steps back one fit).
     std::vector<float> m_value[2];
-    std::vector<float> m_spatial;  ///< exp(-d^2/R^2), d = 0..R
+    /// exp(-d^2/R^2) at d + R, d = -R..R (and kLanes of padding)
+    std::vector<float> m_spatial_row;
+    /// The lane sums of the nine cells of a fit.
+    std::vector<CellLanes> m_cells;
+    /// The splat kernel's output for one row segment (and kLanes padding).
+    std::vector<float> m_splat_s, m_splat_a[3];
     int m_x0 = 0, m_y0 = 0, m_grown = -1;
     double m_zsum = 0.0;  ///< sum of zl over fit points with g > 0
     int m_zcount  = 0;
@@ -253,77 +482,44 @@ private:
 void
 WindowFitter::grow_to(int R)
 {
-    const ROI& img = m_in.image;
-    for (int r = m_grown + 1; r <= R; ++r) {
-        // The ring at Chebyshev distance r, clipped to the image.
-        const int ya = std::max(m_y0 - r, img.ybegin);
-        const int yb = std::min(m_y0 + r, img.yend - 1);
-        for (int y = ya; y <= yb; ++y) {
-            const bool edge_row = (y == m_y0 - r || y == m_y0 + r);
-            const int step      = edge_row ? 1 : 2 * r;
-            for (int x = m_x0 - r; x <= m_x0 + r; x += std::max(step, 1)) {
-                if (x < img.xbegin || x >= img.xend)
-                    continue;
-                const size_t i = m_in.index(x, y);
-                const uint8_t cls = m_in.cls[i];
-                float g = 0.0f;
-                if (cls & kSurface)
-                    g = m_guide(x, y);
-                const size_t c = cache_index(x - m_x0, y - m_y0);
-                m_g[c]          = g;
-                m_fit_weight[c] = 0.0f;
-                if (g > 0.0f && (cls & kFitPoint)) {
-                    m_zsum += m_in.zl[i];
-                    ++m_zcount;
-                    const float sigma = m_in.sigma[i];
-                    if (sigma <= m_opt.sigma_good)
-                        m_fit_weight[c] = g * std::exp(-sigma);
-                }
-            }
-        }
-    }
-    m_grown = std::max(m_grown, R);
-}
-
-
-void
-WindowFitter::accumulate(FitMoments& m, int R, int y, int xa, int xb,
-                         float mean, double& w2s2, float* values) const
-{
-    if (xb < xa)
+    if (R <= m_grown)
         return;
-    const int dy   = y - m_y0;
-    const float ey = m_spatial[size_t(std::abs(dy))];
-    size_t i       = m_in.index(xa, y);
-    size_t c       = cache_index(xa - m_x0, dy);
-    RowSums r;
-    for (int x = xa; x <= xb; ++x, ++i, ++c) {
-        const float fw = m_fit_weight[c];
-        if (!(fw > 0.0f))
-            continue;
-        const double dx    = x - m_x0;
-        const float value  = std::exp(-value_exponent(m_in.zl[i], mean));
-        values[c]          = value;
-        const double w     = fw * m_spatial[size_t(std::abs(x - m_x0))] * ey
-                             * value;
-        const double wdx   = w * dx;
-        const double sigma = m_in.sigma[i];
-        const float* z     = &m_in.z[3 * i];
-        const double w2v   = w * w * double(m_in.vs[i]);
-        r.w[0] += w;
-        r.w[1] += wdx;
-        r.w[2] += wdx * dx;
-        for (int ch = 0; ch < 3; ++ch) {
-            r.wz[ch][0] += w * z[ch];
-            r.wz[ch][1] += wdx * z[ch];
+    const ROI& img = m_in.image;
+    const int ya   = std::max(m_y0 - R, img.ybegin);
+    const int yb   = std::min(m_y0 + R, img.yend - 1);
+    // The square of radius R less the square already grown, a row segment
+    // or two at a time, clipped to the image.
+    auto add = [&](int y, int xa, int xb) {
+        xa = std::max(xa, img.xbegin);
+        xb = std::min(xb, img.xend - 1);
+        if (xb < xa)
+            return;
+        const int dy   = y - m_y0;
+        const size_t i = m_in.index(xa, y);
+        const size_t c = cache_index(xa - m_x0, dy);
+        const int n    = xb - xa + 1;
+        float* g       = &m_g[c];
+        m_guide.row(xa, y, n, g);
+        for (int q = 0; q < n; ++q) {
+            const size_t iq = i + size_t(q);
+            float fw        = 0.0f;
+            if (g[q] > 0.0f && (m_in.cls[iq] & kFitPoint)) {
+                m_zsum += m_in.zl[iq];
+                ++m_zcount;
+                fw = g[q] * m_in.fit_prior[iq];
+            }
+            m_fit_weight[c + size_t(q)] = fw;
         }
-        r.w2v[0] += w2v;
-        r.w2v[1] += w2v * dx;
-        r.w2v[2] += w2v * dx * dx;
-        w2s2 += w * w * sigma * sigma;
-        ++r.count;
+    };
+    for (int y = ya; y <= yb; ++y) {
+        if (std::abs(y - m_y0) > m_grown) {
+            add(y, m_x0 - R, m_x0 + R);
+        } else {
+            add(y, m_x0 - R, m_x0 - m_grown - 1);
+            add(y, m_x0 + m_grown + 1, m_x0 + R);
+        }
     }
-    m.add_row(r, 1.0 / R, double(dy) / R);
+    m_grown = R;
 }
 
 
@@ -345,17 +541,37 @@ WindowFitter::fit(int R, int value_buffer)
     // Nine disjoint cells, each point added once: open quadrants 0-3,
     // half-axes 4 (+y), 5 (-x), 6 (-y), 7 (+x), and the centre 8. The closed
     // quadrants and the whole window are sums of cells.
-    FitMoments cell[9];
-    double w2s2 = 0.0;
+    CellLanes* cells = m_cells.data();
+    std::memset(static_cast<void*>(cells), 0, 9 * sizeof(CellLanes));
+    FitRow row;
+    row.mean        = wf.mean;
+    row.value_scale = value_scale(wf.mean);
     for (int y = ya; y <= yb; ++y) {
         const int dy = y - m_y0;
-        const int left  = dy > 0 ? 1 : (dy < 0 ? 2 : 5);
-        const int mid   = dy > 0 ? 4 : (dy < 0 ? 6 : 8);
-        const int right = dy > 0 ? 0 : (dy < 0 ? 3 : 7);
-        accumulate(cell[left], R, y, xa, m_x0 - 1, wf.mean, w2s2, values);
-        accumulate(cell[mid], R, y, m_x0, m_x0, wf.mean, w2s2, values);
-        accumulate(cell[right], R, y, m_x0 + 1, xb, wf.mean, w2s2, values);
+        row.dy       = float(dy);
+        row.ey       = m_spatial_row[size_t(dy + R)];
+        const int segments[3][3] = {
+            { xa, m_x0 - 1, dy > 0 ? 1 : (dy < 0 ? 2 : 5) },
+            { m_x0, m_x0, dy > 0 ? 4 : (dy < 0 ? 6 : 8) },
+            { m_x0 + 1, xb, dy > 0 ? 0 : (dy < 0 ? 3 : 7) },
+        };
+        for (const auto& seg : segments) {
+            if (seg[1] < seg[0])
+                continue;
+            const size_t i = m_in.index(seg[0], y);
+            const size_t c = cache_index(seg[0] - m_x0, dy);
+            row.n          = seg[1] - seg[0] + 1;
+            row.dx0        = float(seg[0] - m_x0);
+            fit_row(&m_fit_weight[c], &m_spatial_row[size_t(seg[0] - m_x0 + R)],
+                    &m_in.zl[i], &m_in.zfit[0][i], &m_in.zfit[1][i],
+                    &m_in.zfit[2][i], &m_in.vs[i], &m_in.sigma[i], values + c,
+                    &cells[seg[2]], row);
+        }
     }
+    FitMoments cell[9];
+    double w2s2 = 0.0;
+    for (int k = 0; k < 9; ++k)
+        w2s2 += cell[k].set(cells[k], R);
     static const int kQuadrantCells[4][4] = {
         { 0, 4, 7, 8 }, { 1, 4, 5, 8 }, { 2, 5, 6, 8 }, { 3, 6, 7, 8 }
     };
@@ -398,11 +614,31 @@ WindowFitter::edge_fires(const WindowFit& w) const
 void
 WindowFitter::splat(const WindowFit& w)
 {
-    const int R        = w.radius;
-    const double inv_r = 1.0 / R;
-    const float power  = m_opt.quadrant_power;
-    const float* values = m_value[w.values].data();
+    const int R = w.radius;
     set_spatial(R);
+    auto coeffs = [](const Plane& p) {
+        PlaneCoeffs k;
+        for (int ch = 0; ch < 3; ++ch) {
+            k.c[ch] = float(p.c[ch]);
+            k.a[ch] = float(p.a[ch]);
+            k.b[ch] = float(p.b[ch]);
+        }
+        return k;
+    };
+    const PlaneCoeffs whole = coeffs(w.whole);
+    PlaneCoeffs quadrant[4];
+    for (int q = 0; q < 4; ++q)
+        quadrant[q] = w.quadrant[q].present ? coeffs(w.quadrant[q]) : whole;
+    SplatRow row;
+    row.values      = m_value[w.values].data();
+    row.inv_r       = 1.0f / float(R);
+    row.mean        = w.mean;
+    row.value_scale = value_scale(w.mean);
+    row.whole       = whole;
+    row.s           = m_splat_s.data();
+    for (int ch = 0; ch < 3; ++ch)
+        row.a[ch] = m_splat_a[ch].data();
+    const float* values = row.values;
     // Only output pixels receive.
     const int ya = std::max(m_y0 - R, m_out.ybegin);
     const int yb = std::min(m_y0 + R, m_out.yend - 1);
@@ -410,55 +646,39 @@ WindowFitter::splat(const WindowFit& w)
     const int xb = std::min(m_x0 + R, m_out.xend - 1);
     const size_t out_w = size_t(m_out.width());
     for (int y = ya; y <= yb; ++y) {
-        const int dy   = y - m_y0;
-        const double v = dy * inv_r;
-        const float ey = m_spatial[size_t(std::abs(dy))];
-        size_t i       = m_in.index(xa, y);
-        for (int x = xa; x <= xb; ++x, ++i) {
-            const uint8_t cls = m_in.cls[i];
-            if (!(cls & kSurface) || !(cls & kReceiveAny))
+        const int dy = y - m_y0;
+        row.v        = float(dy) * row.inv_r;
+        row.ey       = m_spatial_row[size_t(dy + R)];
+        // The row's two halves, each in one quadrant (dx < 0, dx >= 0).
+        const int halves[2][3] = { { xa, std::min(xb, m_x0 - 1), dy >= 0 ? 1 : 2 },
+                                   { std::max(xa, m_x0), xb, dy >= 0 ? 0 : 3 } };
+        for (const auto& half : halves) {
+            const int x0 = half[0], x1 = half[1];
+            if (x1 < x0)
                 continue;
-            const int dx  = x - m_x0;
-            const float g = g_at(dx, dy);
-            if (!(g > 0.0f))
-                continue;
-            float s = g * m_spatial[size_t(std::abs(dx))] * ey;
-            if (cls & kFitPoint) {
-                const size_t c = cache_index(dx, dy);
-                s *= m_fit_weight[c] > 0.0f
-                         ? values[c]
-                         : std::exp(-value_exponent(m_in.zl[i], w.mean));
+            const size_t i = m_in.index(x0, y);
+            const size_t c = cache_index(x0 - m_x0, dy);
+            row.cls          = &m_in.cls[i];
+            row.g            = &m_g[c];
+            row.spatial      = &m_spatial_row[size_t(x0 - m_x0 + R)];
+            row.fit_weight   = &m_fit_weight[c];
+            row.values       = values + c;
+            row.zl           = &m_in.zl[i];
+            row.n            = x1 - x0 + 1;
+            row.dx0          = float(x0 - m_x0);
+            row.quadrant     = quadrant[half[2]];
+            splat_row(row, m_opt.quadrant_power);
+            size_t o = size_t(y - m_out.ybegin) * out_w
+                       + size_t(x0 - m_out.xbegin);
+            for (int q = 0; q < row.n; ++q, ++o) {
+                const float sw = m_splat_s[size_t(q)];
+                if (!(sw > 0.0f))
+                    continue;
+                double* acc = &m_acc[3 * o];
+                for (int ch = 0; ch < 3; ++ch)
+                    acc[ch] += double(m_splat_a[ch][size_t(q)]);
+                m_wsum[o] += double(sw);
             }
-            const int qi   = dx >= 0 ? (dy >= 0 ? 0 : 3) : (dy >= 0 ? 1 : 2);
-            const Plane& quad = w.quadrant[qi];
-            const double u    = dx * inv_r;
-            const size_t o = size_t(y - m_out.ybegin) * out_w
-                             + size_t(x - m_out.xbegin);
-            double* acc = &m_acc[3 * o];
-            for (int ch = 0; ch < 3; ++ch) {
-                const double Z = w.whole.at(ch, u, v);
-                double A       = Z;
-                if (quad.present) {
-                    const double Zm = quad.at(ch, u, v);
-                    double wm;
-                    if ((Z < 0 && Zm > 0) || (Z > 0 && Zm < 0)) {
-                        wm = kMaxWm;
-                    } else {
-                        double r = (std::fabs(Z) + kEps) / (std::fabs(Zm) + kEps);
-                        r        = std::max(r, 1.0 / r);
-                        if (power == 8.0f) {
-                            const double r2 = r * r, r4 = r2 * r2;
-                            wm = r4 * r4;
-                        } else {
-                            wm = std::pow(r, double(power));
-                        }
-                        wm = std::min(wm, kMaxWm);
-                    }
-                    A = (Z + wm * Zm) / (1.0 + wm);
-                }
-                acc[ch] += s * A;
-            }
-            m_wsum[o] += s;
         }
     }
 }
@@ -551,7 +771,7 @@ check_options(ImageBuf& dst, const FilterOptions& o)
 
 /// Totals over the tiles of one call.
 struct FilterTotals {
-    StripStats windows;
+    BlockStats windows;
     int64_t pixels = 0, passthrough = 0, nonfinite = 0;
 };
 
@@ -580,27 +800,39 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
     const int cy1 = std::min(image.yend, roi.yend + opt.r_max);
     const int cx0 = std::max(image.xbegin, roi.xbegin - opt.r_max);
     const int cx1 = std::min(image.xend, roi.xend + opt.r_max);
-    // Strips anchored at the data window's origin; strips of one parity have
-    // disjoint splat footprints and run in parallel (section 8).
-    const int strip_h   = std::max(2 * opt.r_max + 1, 32);
-    const int first     = (cy0 - image.ybegin) / strip_h;
-    const int last      = (cy1 - 1 - image.ybegin) / strip_h;
-    const int nstrips   = std::max(last - first + 1, 0);
-    std::vector<StripStats> strip_stats(static_cast<size_t>(nstrips));
-    std::atomic<int64_t> rows_done { 0 };
-    const int64_t rows_total = std::max(cy1 - cy0, 0);
+    // Blocks of centres anchored at the data window's origin, at least
+    // 2 r_max + 1 pixels on a side, in four phases by the parity of their
+    // row and column: the splat footprints of the blocks of one phase never
+    // overlap, so they run in parallel without locks, and every pixel
+    // receives its contributions in a fixed order (phase, then centres in
+    // row order within the one block of each phase that reaches it).
+    // Blocks, not whole strips of rows, so that a phase has enough of them
+    // to keep every thread busy to its end (section 8).
+    const int block_h = std::max(2 * opt.r_max + 1, 32);
+    const int block_w = std::max(2 * opt.r_max + 1, 64);
+    const int first_row = (cy0 - image.ybegin) / block_h;
+    const int first_col = (cx0 - image.xbegin) / block_w;
+    const int nrows = cy1 > cy0 ? (cy1 - 1 - image.ybegin) / block_h - first_row + 1
+                                : 0;
+    const int ncols = cx1 > cx0 ? (cx1 - 1 - image.xbegin) / block_w - first_col + 1
+                                : 0;
+    const int nblocks = nrows * ncols;
+    std::vector<BlockStats> block_stats(static_cast<size_t>(nblocks));
+    std::atomic<int64_t> blocks_done { 0 };
     std::mutex progress_mutex;
 
-    auto run_strip = [&](int s) {
-        const int k  = first + s;
-        const int ya = std::max(cy0, image.ybegin + k * strip_h);
-        const int yb = std::min(cy1, image.ybegin + (k + 1) * strip_h);
+    auto run_block = [&](int b) {
+        const int br = first_row + b / ncols, bc = first_col + b % ncols;
+        const int ya = std::max(cy0, image.ybegin + br * block_h);
+        const int yb = std::min(cy1, image.ybegin + (br + 1) * block_h);
+        const int xa = std::max(cx0, image.xbegin + bc * block_w);
+        const int xb = std::min(cx1, image.xbegin + (bc + 1) * block_w);
         WindowFitter fitter(in, opt, roi, acc, wsum);
         GuideWeight lattice_guide(in, opt);
-        StripStats& st = strip_stats[size_t(s)];
+        BlockStats& st = block_stats[size_t(b)];
         const int stride = opt.centre_stride;
         for (int y = ya; y < yb; ++y) {
-            for (int x = cx0; x < cx1; ++x) {
+            for (int x = xa; x < xb; ++x) {
                 if (!(in.cls[in.index(x, y)] & kFitPoint))
                     continue;
                 if (stride > 1) {
@@ -628,20 +860,22 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
                 st.stop_size += reason == StopReason::Size;
                 st.stop_edge += reason == StopReason::Edge;
             }
-            const int64_t done = ++rows_done;
-            if (opt.progress) {
-                std::lock_guard<std::mutex> lock(progress_mutex);
-                opt.progress(float(done) / float(rows_total));
-            }
+        }
+        const int64_t done = ++blocks_done;
+        if (opt.progress) {
+            std::lock_guard<std::mutex> lock(progress_mutex);
+            opt.progress(float(done) / float(nblocks));
         }
     };
-    for (int parity = 0; parity < 2; ++parity) {
-        std::vector<int> strips;
-        for (int s = 0; s < nstrips; ++s)
-            if ((first + s) % 2 == parity)
-                strips.push_back(s);
-        parallel_for(int64_t(0), int64_t(strips.size()),
-                     [&](int64_t j) { run_strip(strips[size_t(j)]); },
+    for (int phase = 0; phase < 4; ++phase) {
+        std::vector<int> blocks;
+        for (int b = 0; b < nblocks; ++b) {
+            const int br = first_row + b / ncols, bc = first_col + b % ncols;
+            if ((br % 2) * 2 + bc % 2 == phase)
+                blocks.push_back(b);
+        }
+        parallel_for(int64_t(0), int64_t(blocks.size()),
+                     [&](int64_t j) { run_block(blocks[size_t(j)]); },
                      paropt(nthreads, paropt::SplitDir::Y, 1));
     }
 
@@ -684,7 +918,7 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
         return false;
     }
 
-    for (const StripStats& s : strip_stats) {
+    for (const BlockStats& s : block_stats) {
         totals.windows.windows += s.windows;
         totals.windows.stop_quality += s.stop_quality;
         totals.windows.stop_size += s.stop_size;
