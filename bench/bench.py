@@ -101,6 +101,34 @@ def run_measured(argv, stdout_path, stderr_path, timeout):
             'timed_out': bool(killed)}
 
 
+def median(values):
+    v = sorted(values)
+    n = len(v)
+    return v[n // 2] if n % 2 else 0.5 * (v[n // 2 - 1] + v[n // 2])
+
+
+def zdenoise_stage_times(stdout_path):
+    """read_s / denoise_s / write_s from zdenoise -v's summary line
+    ("zdenoise: read 1.12s, denoise 27.84s, write 2.32s, total ...")."""
+    times = {}
+    try:
+        with open(stdout_path, 'rb') as f:
+            text = f.read().decode('utf-8', 'replace')
+    except OSError:
+        return times
+    for line in text.splitlines():
+        if line.startswith('zdenoise: read '):
+            for part in line[len('zdenoise: '):].split(','):
+                words = part.split()
+                if len(words) >= 2 and words[0] in ('read', 'denoise', 'write') \
+                        and words[1].endswith('s'):
+                    try:
+                        times[words[0] + '_s'] = float(words[1][:-1])
+                    except ValueError:
+                        pass
+    return times
+
+
 def tail(path, n=3):
     try:
         with open(path, 'rb') as f:
@@ -296,6 +324,9 @@ def main(argv=None):
     ap.add_argument('--json', metavar='FILE', help='write all numbers as JSON')
     ap.add_argument('--keep', metavar='DIR', help='write outputs to DIR and keep them (default: temp dir, removed)')
     ap.add_argument('--no-perf', action='store_true', help='skip the 1920x1080 perf frame')
+    ap.add_argument('--perf-runs', type=int, default=3,
+                    help='runs of oiiotool and zdenoise on the perf frame, alternating; '
+                         'medians are reported (default 3)')
     ap.add_argument('--baseline-only', action='store_true', help='do not run zdenoise (noisy + baseline only)')
     ap.add_argument('--baseline-sigma', type=float, default=BASELINE_SIGMA,
                     help=f'baseline Gaussian sigma (default {BASELINE_SIGMA}, see comment in the script)')
@@ -422,28 +453,46 @@ def main(argv=None):
 
         perf = None
         if do_perf:
-            perf = {'input': perf_in}
+            perf = {'input': perf_in, 'runs': a.perf_runs}
             warm_cache(perf_in)
+            ch = ','.join(f'{c}=ViewLayer.Combined.{c}' for c in 'RGBA')
+            tools = []
             if oiiotool:
-                ch = ','.join(f'{c}=ViewLayer.Combined.{c}' for c in 'RGBA')
-                cmd = [oiiotool, perf_in, '--ch', ch, '-o', os.path.join(work, 'perf_oiiotool.exr')]
-                r = run_measured(cmd, os.path.join(work, 'perf_oiiotool.stdout'),
-                                 os.path.join(work, 'perf_oiiotool.stderr'), a.timeout)
-                perf['oiiotool'] = {**r, 'cmd': cmd}
-                if r['rc'] != 0:
-                    perf['oiiotool']['error'] = tail(os.path.join(work, 'perf_oiiotool.stderr'))
-                log(f"perf: oiiotool {fmt(r['wall_s'], '.3f')} s rc={r['rc']}")
+                tools.append(('oiiotool', [oiiotool, perf_in, '--ch', ch, '-o',
+                                           os.path.join(work, 'perf_oiiotool.exr')]))
             else:
                 perf['oiiotool'] = {'error': 'oiiotool not on PATH'}
             if not a.baseline_only:
-                cmd = [zbin, '--in', perf_in, '-o', os.path.join(work, 'perf_zdenoise.exr')] + extra
-                r = run_measured(cmd, os.path.join(work, 'perf_zdenoise.stdout'),
-                                 os.path.join(work, 'perf_zdenoise.stderr'), a.timeout)
-                perf['zdenoise'] = {**r, 'cmd': cmd}
-                if r['rc'] != 0:
-                    perf['zdenoise']['error'] = tail(os.path.join(work, 'perf_zdenoise.stderr'))
-                    failed_runs.append('perf')
-                log(f"perf: zdenoise {fmt(r['wall_s'], '.3f')} s rc={r['rc']}")
+                # -v: zdenoise prints its own read / denoise / write times
+                tools.append(('zdenoise', [zbin, '--in', perf_in, '-o',
+                                           os.path.join(work, 'perf_zdenoise.exr'), '-v'] + extra))
+            # Alternating runs, medians: the machine's other load hits both alike.
+            runs = {name: [] for name, _ in tools}
+            for k in range(a.perf_runs):
+                for name, cmd in tools:
+                    out = os.path.join(work, f'perf_{name}.stdout')
+                    err = os.path.join(work, f'perf_{name}.stderr')
+                    r = run_measured(cmd, out, err, a.timeout)
+                    if r['rc'] != 0:
+                        r['error'] = tail(err)
+                    elif name == 'zdenoise':
+                        r.update(zdenoise_stage_times(out))
+                    runs[name].append(r)
+                    log(f"perf {k + 1}/{a.perf_runs}: {name} {fmt(r['wall_s'], '.3f')} s rc={r['rc']}")
+            for name, cmd in tools:
+                rs = runs[name]
+                bad = [r for r in rs if r['rc'] != 0]
+                if bad:
+                    perf[name] = {**bad[0], 'cmd': cmd}
+                    if name == 'zdenoise':
+                        failed_runs.append('perf')
+                    continue
+                perf[name] = {'rc': 0, 'cmd': cmd, 'runs': rs,
+                              'wall_s': median([r['wall_s'] for r in rs]),
+                              'peak_mib': max(r['peak_mib'] for r in rs)}
+                for key in ('read_s', 'denoise_s', 'write_s'):
+                    if all(key in r for r in rs):
+                        perf[name][key] = median([r[key] for r in rs])
 
         # ---------------- phase 2: metrics (numpy from here on) ----------------
         sys.path.insert(0, os.path.join(a.shared, 'tools'))
@@ -530,14 +579,20 @@ def main(argv=None):
             z, o = perf.get('zdenoise', {}), perf.get('oiiotool', {})
             parts = []
             if z:
-                parts.append(f"zdenoise {z['wall_s']:.3f} s, {z['peak_mib']:.0f} MiB" if z.get('rc') == 0
-                             else f"zdenoise FAILED ({z.get('error', '')})")
+                if z.get('rc') == 0:
+                    stages = ''
+                    if 'denoise_s' in z:
+                        stages = (f" (read {z['read_s']:.2f} s, filter {z['denoise_s']:.2f} s, "
+                                  f"write {z['write_s']:.2f} s)")
+                    parts.append(f"zdenoise {z['wall_s']:.3f} s{stages}, {z['peak_mib']:.0f} MiB")
+                else:
+                    parts.append(f"zdenoise FAILED ({z.get('error', '')})")
             if o:
                 parts.append(f"oiiotool read + write Combined RGBA {o['wall_s']:.3f} s, {o['peak_mib']:.0f} MiB"
                              if o.get('rc') == 0 else f"oiiotool FAILED ({o.get('error', '')})")
             if perf.get('ratio_zdenoise_over_oiiotool'):
                 parts.append(f"ratio zdenoise/oiiotool {perf['ratio_zdenoise_over_oiiotool']:.2f}x")
-            print('perf 1920x1080: ' + '; '.join(parts))
+            print(f"perf 1920x1080, medians of {perf['runs']} alternating runs: " + '; '.join(parts))
         else:
             print(f'perf: {perf_note}')
         if a.baseline_only:

@@ -204,9 +204,10 @@ splat_lanes(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
             for (int ch = 0; ch < 3; ++ch) {
                 const float Z  = P.c[ch] + P.a[ch] * u + P.b[ch] * v;
                 const float Zm = Q.c[ch] + Q.a[ch] * u + Q.b[ch] * v;
-                float r = (std::fabs(Z) + float(kEps))
-                          / (std::fabs(Zm) + float(kEps));
-                r = std::max(r, 1.0f / r);
+                // r = max(a/b, b/a) with one division
+                const float a = std::fabs(Z) + float(kEps);
+                const float b = std::fabs(Zm) + float(kEps);
+                const float r = std::max(a, b) / std::min(a, b);
                 float wm;
                 if (kPower8) {
                     const float r2 = r * r, r4 = r2 * r2;
@@ -500,16 +501,22 @@ WindowFitter::grow_to(int R)
         const int n    = xb - xa + 1;
         float* g       = &m_g[c];
         m_guide.row(xa, y, n, g);
+        // Locals: the sums must not go through memory at every point.
+        double zsum = m_zsum;
+        int zcount  = m_zcount;
+        float* fit_weight = &m_fit_weight[c];
         for (int q = 0; q < n; ++q) {
             const size_t iq = i + size_t(q);
             float fw        = 0.0f;
             if (g[q] > 0.0f && (m_in.cls[iq] & kFitPoint)) {
-                m_zsum += m_in.zl[iq];
-                ++m_zcount;
+                zsum += m_in.zl[iq];
+                ++zcount;
                 fw = g[q] * m_in.fit_prior[iq];
             }
-            m_fit_weight[c + size_t(q)] = fw;
+            fit_weight[q] = fw;
         }
+        m_zsum   = zsum;
+        m_zcount = zcount;
     };
     for (int y = ya; y <= yb; ++y) {
         if (std::abs(y - m_y0) > m_grown) {
