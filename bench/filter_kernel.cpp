@@ -23,6 +23,9 @@
 namespace {
 
 constexpr int kSize = 128;
+/// Thread scaling needs enough blocks of centres for both threads to the
+/// end of each phase: 384 x 384 gives 12 x 6 blocks.
+constexpr int kThreadsSize = 384;
 
 /// The quotient (noisy / albedo) and guides of a scene, made once per case.
 struct KernelInput {
@@ -77,7 +80,7 @@ FineTexture(benchmark::State& state)
 void
 StaircaseThreads(benchmark::State& state)
 {
-    const KernelInput in(synth::staircase(kSize, kSize, 8, { 8, 7 }));
+    const KernelInput in(synth::staircase(kThreadsSize, kThreadsSize, 8, { 8, 7 }));
     run_filter(state, in, int(state.range(0)));
 }
 

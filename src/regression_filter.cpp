@@ -183,10 +183,13 @@ splat_lanes(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
     const float ey = in.ey, inv_r = in.inv_r, v = in.v, dx0 = in.dx0;
     const float mean = in.mean, value_scale = in.value_scale;
     const int n = in.n;
-    // No sums across points here: a plain loop, vectorised at whatever
-    // width, computes every point alike.
-    for (int q = 0; q < n; ++q) {
-        {
+    // Whole blocks of kLanes points (the inputs and outputs are padded):
+    // segments are short, and a plain loop would spend most of its time in
+    // its scalar remainder. No sums across points, so any vector width
+    // computes every point alike.
+    for (int j = 0; j < n; j += kLanes) {
+        for (int l = 0; l < kLanes; ++l) {
+            const int q       = j + l;
             const uint32_t cl = cls[q];
             const float g    = gw[q];
             const float fw   = fitw[q];
