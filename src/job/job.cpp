@@ -275,6 +275,17 @@ select_role(InputFiles& files, const InputArg& arg, Role role,
 }
 
 
+/// Whether values of `type` can be read or written at `p`, `stride` bytes
+/// apart. Packed pixels of mixed types do not always allow it (a float
+/// after three halves), and then the values are moved as bytes.
+bool
+aligned_for(const void* p, stride_t stride, TypeDesc type)
+{
+    const size_t a = type.basesize();
+    return reinterpret_cast<uintptr_t>(p) % a == 0 && size_t(stride) % a == 0;
+}
+
+
 /// Move `n` consecutive channels of one pixel type from one interleaved
 /// row to another, converting to `to` (OIIO's conversions, as a read or
 /// write converting them would).
@@ -283,10 +294,29 @@ move_channels(const unsigned char* src, TypeDesc from, stride_t src_stride,
               unsigned char* dst, TypeDesc to, stride_t dst_stride, int n,
               int width)
 {
+    const size_t in = size_t(n) * from.size(), out = size_t(n) * to.size();
     if (from == to) {
-        const size_t bytes = size_t(n) * from.size();
         for (int x = 0; x < width; ++x)
-            std::memcpy(dst + x * dst_stride, src + x * src_stride, bytes);
+            std::memcpy(dst + x * dst_stride, src + x * src_stride, in);
+        return;
+    }
+    // Misaligned values go through packed (so aligned) rows of their own.
+    thread_local std::vector<unsigned char> packed_in, packed_out;
+    if (!aligned_for(src, src_stride, from)) {
+        packed_in.resize(in * size_t(width));
+        for (int x = 0; x < width; ++x)
+            std::memcpy(&packed_in[size_t(x) * in], src + x * src_stride, in);
+        src        = packed_in.data();
+        src_stride = stride_t(in);
+    }
+    if (!aligned_for(dst, dst_stride, to)) {
+        packed_out.resize(out * size_t(width));
+        convert_image(n, width, 1, 1, src, from, src_stride, AutoStride,
+                      AutoStride, packed_out.data(), to, stride_t(out),
+                      AutoStride, AutoStride);
+        for (int x = 0; x < width; ++x)
+            std::memcpy(dst + x * dst_stride, &packed_out[size_t(x) * out],
+                        out);
         return;
     }
     convert_image(n, width, 1, 1, src, from, src_stride, AutoStride,
@@ -321,6 +351,17 @@ channel_runs(const RowReader& rows, const std::vector<int>& indices)
 }
 
 
+/// Whether a role's channels can be handed to the library as the file's
+/// rows themselves: next to each other, of one type, where that type may
+/// be read.
+bool
+wraps(const RowReader& rows, const Selection& s,
+      const std::vector<ChannelRun>& runs)
+{
+    return runs.size() == 1 && rows.aligned(s.indices[0]);
+}
+
+
 /// The rows the current strip holds: the strip's own rows (`core`) and the
 /// rows around them that they depend on (`held`: the filter's halo, and
 /// the residual layer mask's reach), x over the noisy input's columns.
@@ -340,7 +381,7 @@ struct Strip {
         const int nch         = int(s.indices.size());
         const std::vector<ChannelRun> runs = channel_runs(rows, s.indices);
         const int c0    = s.indices[0];
-        const bool wrap = read_only && runs.size() == 1;
+        const bool wrap = read_only && wraps(rows, s, runs);
         ImageSpec spec(held.width(), held.height(), nch,
                        wrap ? rows.format(c0) : TypeFloat);
         spec.x = spec.full_x = held.xbegin;
@@ -476,7 +517,8 @@ select_sum(InputFiles& files, const std::string& path,
 /// window there to r_max for nothing (it made layered mode 5-10x slower than
 /// beauty mode). Pixels within `reach` of a real residual stay: an emitter's
 /// anti-aliased edge has pixels whose few coverage samples all missed it,
-/// and the filter gives them their share of its light.
+/// and the filter gives them their share of its light. All three images
+/// are float.
 void
 mask_negligible_residual(ImageBuf& albedo, const ImageBuf& residual,
                          const ImageBuf& beauty, int reach, int nthreads)
@@ -670,8 +712,14 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
             fail(format("layers of '{}': {}", j.in.path,
                         one_line(l.radiance[i].geterror())));
     }
-    mask_negligible_residual(l.albedo[i], l.radiance[i], beauty, plan.reach,
-                             j.threads);
+    // The mask reads float images; the beauty may be the file's half rows.
+    const ImageBuf beauty_float = beauty.spec().format == TypeFloat
+                                      ? ImageBuf()
+                                      : beauty.copy(TypeFloat);
+    mask_negligible_residual(l.albedo[i], l.radiance[i],
+                             beauty_float.initialized() ? beauty_float
+                                                        : beauty,
+                             plan.reach, j.threads);
     return layers;
 }
 
@@ -894,7 +942,7 @@ struct Output {
     std::vector<TypeDesc> row_types;  ///< as the sink takes them
     std::vector<size_t> offset;       ///< of each channel in a pixel
     size_t pixel_bytes = 0;
-    std::vector<unsigned char> band;
+    std::vector<unsigned char> band, plane;
 
     void set_row_types(bool float_rows)
     {
@@ -956,15 +1004,21 @@ struct Output {
                 const OutputChannel& oc = channels[c];
                 if (oc.file >= 0)
                     continue;
+                // Through a plane of its own: the channel's place in the
+                // packed pixels may not suit its type (aligned_for()).
                 const ImageBuf& img = *images[size_t(oc.image)];
+                const size_t size   = row_types[c].size();
+                plane.resize(size * size_t(width) * size_t(y1 - y0));
                 if (!img.get_pixels(ROI(core.xbegin, core.xend, y0, y1, 0, 1,
                                         oc.image_channel,
                                         oc.image_channel + 1),
-                                    row_types[c], band.data() + offset[c],
-                                    stride_t(pixel_bytes),
-                                    stride_t(row_bytes)))
+                                    row_types[c], plane.data()))
                     fail(format("cannot assemble the output: {}",
                                 one_line(img.geterror())));
+                for (size_t p = 0, n = size_t(width) * size_t(y1 - y0); p < n;
+                     ++p)
+                    std::memcpy(band.data() + p * pixel_bytes + offset[c],
+                                &plane[p * size], size);
             }
             std::string err;
             if (!sink->rows(y0, y1, band.data(), err))
@@ -1157,7 +1211,8 @@ run(Job j, OutputSink& sink, JobResult& result)
     // file, else the file's rows themselves (Strip::image()).
     const bool radiance_as_is = !managed || spaces.input == spaces.working;
     auto role_bytes = [&](const Selection& s, bool read_only) {
-        return read_only && channel_runs(files.rows(s.path), s.indices).size() == 1
+        const RowReader& rows = files.rows(s.path);
+        return read_only && wraps(rows, s, channel_runs(rows, s.indices))
                    ? 0.0
                    : 4.0 * double(s.indices.size());
     };

@@ -195,7 +195,11 @@ cryptomatte_object_selection(const std::vector<std::string>& names)
             const std::string l = format("{}{:02d}", base, rank);
             if (!has_layer(names, l, "RGBA"))
                 break;
-            const bool upper = has_channel(names, l + ".R");
+            // Upper case only where all four are (a stray ".R" beside
+            // r, g, b, a must not switch the lower-case ones off).
+            bool upper = true;
+            for (const char* c = "RGBA"; *c; ++c)
+                upper = upper && has_channel(names, l + "." + *c);
             for (const char* c = "RGBA"; *c; ++c)
                 selection += (selection.empty() ? "" : ",") + l + "."
                              + char(upper ? *c : std::tolower(*c));

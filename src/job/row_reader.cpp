@@ -205,6 +205,18 @@ RowReader::adjacent(int a, int b) const
 }
 
 
+bool
+RowReader::aligned(int c) const
+{
+    const auto [p, k] = m_channel[size_t(c)];
+    const Part& part  = m_parts[size_t(p)];
+    const size_t a    = part.spec.channelformat(k).basesize();
+    // The rows' buffer comes from the allocator: aligned for any type.
+    return part.offset[size_t(k - part.chbegin)] % a == 0
+           && part.pixel_bytes % a == 0 && part.row_bytes % a == 0;
+}
+
+
 const unsigned char*
 RowReader::at(int c, int x, int y) const
 {

@@ -52,6 +52,11 @@ public:
     /// the next bytes), so that the two move as one.
     bool adjacent(int a, int b) const;
 
+    /// Whether channel c's values lie at addresses its type may be read
+    /// from (a file's pixels are packed: a float after three halves does
+    /// not).
+    bool aligned(int c) const;
+
     /// Channel c of row y (held), pixel x: its first byte; pixels of a row
     /// are `stride(c)` bytes apart, rows `row_stride(c)`.
     const unsigned char* at(int c, int x, int y) const;
