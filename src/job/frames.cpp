@@ -3,6 +3,9 @@
 
 #include "frames.h"
 
+#include <cctype>
+#include <cstdlib>
+
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
 
@@ -11,11 +14,43 @@ namespace job {
 
 using namespace OIIO;
 
+namespace {
+
+/// Whether OIIO's printf-style pattern of a path holds exactly one frame
+/// conversion (%d, %4d, %04d) and nothing else but "%%": OIIO formats it
+/// with fmt, which aborts the program on any other '%' sequence (a name
+/// like "100%x.####.exr"; found by tests/fuzz/fuzz_frames).
+bool
+one_frame_conversion(const std::string& pattern)
+{
+    int conversions = 0;
+    for (size_t i = 0; i < pattern.size(); ++i) {
+        if (pattern[i] != '%')
+            continue;
+        if (i + 1 < pattern.size() && pattern[i + 1] == '%') {
+            ++i;
+            continue;
+        }
+        size_t j = i + 1;
+        while (j < pattern.size() && pattern[j] >= '0' && pattern[j] <= '9')
+            ++j;
+        if (j >= pattern.size() || pattern[j] != 'd' || j - i > 4)
+            return false;
+        ++conversions;
+        i = j;
+    }
+    return conversions == 1;
+}
+
+}  // namespace
+
+
 bool
 has_frame_pattern(const std::string& path, std::string* frames_in_name)
 {
     std::string printf_pattern, frames;
-    if (!Filesystem::parse_pattern(path.c_str(), 0, printf_pattern, frames))
+    if (!Filesystem::parse_pattern(path.c_str(), 0, printf_pattern, frames)
+        || !one_frame_conversion(printf_pattern))
         return false;
     if (frames_in_name && !frames.empty())
         *frames_in_name = frames;
@@ -29,6 +64,7 @@ frame_path(const std::string& path, int frame)
     std::string printf_pattern, frames;
     std::vector<std::string> names;
     if (!Filesystem::parse_pattern(path.c_str(), 0, printf_pattern, frames)
+        || !one_frame_conversion(printf_pattern)
         || !Filesystem::enumerate_file_sequence(printf_pattern, { frame },
                                                 names)
         || names.size() != 1)
@@ -37,11 +73,58 @@ frame_path(const std::string& path, int frame)
 }
 
 
+namespace {
+
+/// More frames than any sequence a render farm runs: a list that would
+/// name more (a typo such as "1-1000000000") is refused before OIIO
+/// enumerates it into memory.
+constexpr double kMaxFrames = 1e6;
+
+/// An upper bound on the frames `list` names: each comma item "A", "A-B",
+/// "A-BxN" or "A-ByN" counts |B - A| + 1 (a step only makes fewer). Items
+/// of another form count 1 and are left to OIIO to accept or refuse.
+double
+frame_count_bound(const std::string& list)
+{
+    double count = 0.0;
+    for (string_view item : Strutil::splitsv(list, ",")) {
+        item = Strutil::strip(item);
+        // A, then an optional "-B" (A and B may be negative).
+        const char* p   = item.data();
+        const char* end = p + item.size();
+        auto number     = [&](double& v) {
+            const char* q = p;
+            if (q < end && (*q == '-' || *q == '+'))
+                ++q;
+            if (q == end || !std::isdigit(static_cast<unsigned char>(*q)))
+                return false;
+            while (q < end && std::isdigit(static_cast<unsigned char>(*q)))
+                ++q;
+            v = std::strtod(std::string(p, q).c_str(), nullptr);
+            p = q;
+            return true;
+        };
+        double a = 0.0, b = 0.0;
+        if (number(a) && p < end && *p == '-') {
+            ++p;
+            if (number(b)) {
+                count += std::abs(b - a) + 1.0;
+                continue;
+            }
+        }
+        count += 1.0;
+    }
+    return count;
+}
+
+}  // namespace
+
+
 bool
 parse_frame_list(const std::string& list, std::vector<int>& frames)
 {
     frames.clear();
-    return !Strutil::strip(list).empty()
+    return !Strutil::strip(list).empty() && frame_count_bound(list) <= kMaxFrames
            && Filesystem::enumerate_sequence(list, frames) && !frames.empty();
 }
 

@@ -27,7 +27,8 @@ has_frame_pattern(const std::string& path, std::string* frames_in_name = nullptr
 std::string
 frame_path(const std::string& path, int frame);
 
-/// The frames of a frame list; false when it is malformed or empty.
+/// The frames of a frame list; false when it is malformed, empty, or names
+/// more than a million frames (refused before they are enumerated).
 bool
 parse_frame_list(const std::string& list, std::vector<int>& frames);
 

@@ -38,10 +38,21 @@ struct Failure {
     std::string message;
 };
 
+/// Throw `message` with its control characters escaped: it quotes keys
+/// and values the recipe or its REST arguments gave, and an error stays
+/// one line whatever they hold (a newline in a key; found by
+/// tests/fuzz/fuzz_recipe).
 [[noreturn]] void
 fail(const std::string& message)
 {
-    throw Failure { message };
+    std::string line;
+    for (unsigned char c : message) {
+        if (c < 0x20 || c == 0x7f)
+            line += format("\\x{:02x}", unsigned(c));
+        else
+            line += char(c);
+    }
+    throw Failure { line };
 }
 
 

@@ -1,0 +1,57 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Fuzzing the frame patterns of file names and the frame lists (oiiotool's
+// conventions, src/job/frames.h): they must never crash, never enumerate
+// more than a million frames, and a list must survive being written back
+// as text and cut into farm chunks.
+//
+// Input: "PATH\0FRAME LIST".
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "../../src/job/frames.h"
+
+using namespace zdenoise::job;
+
+extern "C" int
+LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
+{
+    const std::string input(reinterpret_cast<const char*>(data), size);
+    const size_t nul = input.find('\0');
+    const std::string path = input.substr(0, nul);
+    const std::string list = nul == std::string::npos ? std::string()
+                                                      : input.substr(nul + 1);
+    std::string in_name;
+    if (has_frame_pattern(path, &in_name)) {
+        (void)frame_path(path, 1001);
+        (void)frame_path(path, -7);
+    }
+    std::vector<int> frames;
+    if (!parse_frame_list(list, frames))
+        return 0;
+    if (frames.empty() || frames.size() > 1000000) {
+        std::fprintf(stderr, "accepted %zu frames\n", frames.size());
+        std::abort();
+    }
+    size_t chunked = 0;
+    for (const std::string& chunk : frame_chunks(frames, 7)) {
+        std::vector<int> part;
+        if (!parse_frame_list(chunk, part)) {
+            std::fprintf(stderr, "chunk '%s' refused\n", chunk.c_str());
+            std::abort();
+        }
+        chunked += part.size();
+    }
+    if (chunked != frames.size()) {
+        std::fprintf(stderr, "chunks hold %zu of %zu frames\n", chunked,
+                     frames.size());
+        std::abort();
+    }
+    return 0;
+}
