@@ -337,6 +337,8 @@ TEST_F(PluginTest, BrokenRecipesAreOiioErrorsNotCrashes)
           "Diffuse.R" },
         { "typo.zdn", sample_recipe("\"etaa\": 0.03"), "unknown key \"etaa\"" },
         { "bad_value.zdn", sample_recipe("\"rmax\": \"big\""), "\"rmax\" must be a number" },
+        // Found by fuzz_recipe: it became infinity, written back as null.
+        { "huge_value.zdn", sample_recipe("\"edge-k\": 4e50"), "\"edge-k\" is out of range" },
         { "bad_filter.zdn", sample_recipe("\"rmin\": 5, \"rmax\": 3"), "r_max" },
         { "recursive.zdn", "{\"zdenoise-recipe\": 1, \"in\": \"other.zdn\"}",
           "itself a recipe" },

@@ -184,12 +184,16 @@ TEST_F(Sequence, UsageErrorsAreOneLine)
     r = zdenoise(sequence_args() + " --frames banana");
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.err.find("--frames: 'banana'"), std::string::npos) << r.err;
+    // Found by fuzz_frames: OIIO clamps a frame beyond an int to another.
+    const RunResult huge = zdenoise(sequence_args() + " --frames 1,36377777763");
+    EXPECT_EQ(huge.status, 2);
+    EXPECT_NE(huge.err.find("--frames: '1,36377777763'"), std::string::npos) << huge.err;
     r = zdenoise("--in " + path("noisy.#.exr") + " --albedo " + path("albedo.#.exr") + " -o "
                  + path("out.exr") + " --frames 1");
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.err.find("no frame pattern"), std::string::npos) << r.err;
     EXPECT_FALSE(Filesystem::exists(path("out.exr")));
-    for (const RunResult& e : { r })
+    for (const RunResult& e : { r, huge })
         EXPECT_EQ(std::count(e.err.begin(), e.err.end(), '\n'), 1) << e.err;
 }
 
@@ -202,6 +206,11 @@ TEST_F(Sequence, PrintChunksSplitsTheFrameListForAFarm)
     r = zdenoise(sequence_args() + " --frames 1-9x2 --print-chunks 4");
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_EQ(r.out, "1,3,5,7\n9\n");
+    // The last frames an int holds (found by fuzz_frames: the run test
+    // overflowed).
+    r = zdenoise(sequence_args() + " --frames 2147483645-2147483647 --print-chunks 2");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.out, "2147483645-2147483646\n2147483647\n");
 }
 
 

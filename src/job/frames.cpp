@@ -4,7 +4,10 @@
 #include "frames.h"
 
 #include <cctype>
+#include <cmath>
+#include <cstdint>
 #include <cstdlib>
+#include <limits>
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
@@ -75,14 +78,11 @@ frame_path(const std::string& path, int frame)
 
 namespace {
 
-/// More frames than any sequence a render farm runs: a list that would
-/// name more (a typo such as "1-1000000000") is refused before OIIO
-/// enumerates it into memory.
-constexpr double kMaxFrames = 1e6;
-
 /// An upper bound on the frames `list` names: each comma item "A", "A-B",
 /// "A-BxN" or "A-ByN" counts |B - A| + 1 (a step only makes fewer). Items
-/// of another form count 1 and are left to OIIO to accept or refuse.
+/// of another form count 1 and are left to OIIO to accept or refuse. A
+/// frame number beyond an int ("36377777763") counts as infinitely many:
+/// OIIO would clamp it to another frame without a word.
 double
 frame_count_bound(const std::string& list)
 {
@@ -104,10 +104,16 @@ frame_count_bound(const std::string& list)
             p = q;
             return true;
         };
+        const double int_max = std::numeric_limits<int>::max();
         double a = 0.0, b = 0.0;
-        if (number(a) && p < end && *p == '-') {
+        const bool has_a = number(a);
+        if (has_a && std::fabs(a) > int_max)
+            return std::numeric_limits<double>::infinity();
+        if (has_a && p < end && *p == '-') {
             ++p;
             if (number(b)) {
+                if (std::fabs(b) > int_max)
+                    return std::numeric_limits<double>::infinity();
                 count += std::abs(b - a) + 1.0;
                 continue;
             }
@@ -121,10 +127,12 @@ frame_count_bound(const std::string& list)
 
 
 bool
-parse_frame_list(const std::string& list, std::vector<int>& frames)
+parse_frame_list(const std::string& list, std::vector<int>& frames,
+                 int max_frames)
 {
     frames.clear();
-    return !Strutil::strip(list).empty() && frame_count_bound(list) <= kMaxFrames
+    return !Strutil::strip(list).empty()
+           && frame_count_bound(list) <= static_cast<double>(max_frames)
            && Filesystem::enumerate_sequence(list, frames) && !frames.empty();
 }
 
@@ -135,7 +143,8 @@ frame_list_text(const std::vector<int>& frames)
     std::string text;
     for (size_t i = 0; i < frames.size();) {
         size_t j = i;
-        while (j + 1 < frames.size() && frames[j + 1] == frames[j] + 1)
+        while (j + 1 < frames.size()
+               && int64_t(frames[j + 1]) == int64_t(frames[j]) + 1)
             ++j;
         text += (text.empty() ? "" : ",") + std::to_string(frames[i]);
         if (j > i)

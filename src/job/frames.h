@@ -27,10 +27,16 @@ has_frame_pattern(const std::string& path, std::string* frames_in_name = nullptr
 std::string
 frame_path(const std::string& path, int frame);
 
+/// A frame list may name at most this many frames: more than any sequence a
+/// render farm runs, so a longer one is a typo such as "1-1000000000".
+constexpr int kMaxFrameListFrames = 1000000;
+
 /// The frames of a frame list; false when it is malformed, empty, or names
-/// more than a million frames (refused before they are enumerated).
+/// more than `max_frames` frames (refused before they are enumerated, so
+/// a typo costs no memory; the fuzz target lowers it to stay fast).
 bool
-parse_frame_list(const std::string& list, std::vector<int>& frames);
+parse_frame_list(const std::string& list, std::vector<int>& frames,
+                 int max_frames = kMaxFrameListFrames);
 
 /// Frames as a frame list, runs written as ranges: "1001-1003,1007".
 std::string

@@ -5,6 +5,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <limits>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -227,6 +228,17 @@ parse_number(const std::string& key, const json& value)
     return value.get<double>();
 }
 
+/// A filter option's number: it must fit a float (1e50 would become
+/// infinity, which a recipe cannot even be written back with).
+float
+parse_float(const std::string& key, const json& value)
+{
+    const double v = parse_number(key, value);
+    if (!(std::fabs(v) <= double(std::numeric_limits<float>::max())))
+        fail(format("\"{}\" is out of range: {}", key, shown(value)));
+    return float(v);
+}
+
 int
 parse_whole_number(const std::string& key, const json& value)
 {
@@ -405,7 +417,7 @@ parse(const std::string& text, const std::string& folder,
             if (option->whole)
                 job.filter.*(option->whole) = parse_whole_number(key, value);
             else
-                job.filter.*(option->real) = float(parse_number(key, value));
+                job.filter.*(option->real) = parse_float(key, value);
         } else {
             fail(format("unknown key \"{}\" (known: {})", key,
                         known_keys(false)));

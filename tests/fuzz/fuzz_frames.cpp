@@ -3,8 +3,10 @@
 //
 // Fuzzing the frame patterns of file names and the frame lists (oiiotool's
 // conventions, src/job/frames.h): they must never crash, never enumerate
-// more than a million frames, and a list must survive being written back
-// as text and cut into farm chunks.
+// more than the frames allowed, and a list must survive being written back
+// as text and cut into farm chunks. The limit is lowered from a million to
+// 4096 here: the code paths are the same, and enumerating a million frames
+// per input would make the fuzzer forty times slower.
 //
 // Input: "PATH\0FRAME LIST".
 
@@ -32,10 +34,11 @@ LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
         (void)frame_path(path, 1001);
         (void)frame_path(path, -7);
     }
+    constexpr int kFuzzMaxFrames = 4096;
     std::vector<int> frames;
-    if (!parse_frame_list(list, frames))
+    if (!parse_frame_list(list, frames, kFuzzMaxFrames))
         return 0;
-    if (frames.empty() || frames.size() > 1000000) {
+    if (frames.empty() || frames.size() > size_t(kFuzzMaxFrames)) {
         std::fprintf(stderr, "accepted %zu frames\n", frames.size());
         std::abort();
     }
