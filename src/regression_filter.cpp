@@ -771,6 +771,8 @@ check_options(ImageBuf& dst, const FilterOptions& o)
         return bad("centre_stride", o.centre_stride,
                    "needs 1 <= centre_stride <= r_min + 1 (windows must "
                    "overlap)");
+    if (o.stride_edges != 0 && o.stride_edges != 1)
+        return bad("stride_edges", o.stride_edges, "needs 0 or 1");
     if (!finite_nonneg(o.quadrant_power))
         return bad("quadrant_power", o.quadrant_power,
                    "needs a finite number >= 0");
@@ -818,8 +820,10 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
     // row order within the one block of each phase that reaches it).
     // Blocks, not whole strips of rows, so that a phase has enough of them
     // to keep every thread busy to its end (section 8).
-    const int block_h = std::max(2 * opt.r_max + 1, 32);
-    const int block_w = std::max(2 * opt.r_max + 1, 64);
+    // With a stride, multiples of it.
+    const int s_ = opt.centre_stride;
+    const int block_h = (std::max(2 * opt.r_max + 1, 32) + s_ - 1) / s_ * s_;
+    const int block_w = (std::max(2 * opt.r_max + 1, 64) + s_ - 1) / s_ * s_;
     const int first_row = (cy0 - image.ybegin) / block_h;
     const int first_col = (cx0 - image.xbegin) / block_w;
     const int nrows = cy1 > cy0 ? (cy1 - 1 - image.ybegin) / block_h - first_row + 1
@@ -837,38 +841,82 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
         const int yb = std::min(cy1, image.ybegin + (br + 1) * block_h);
         const int xa = std::max(cx0, image.xbegin + bc * block_w);
         const int xb = std::min(cx1, image.xbegin + (bc + 1) * block_w);
+        const int by_end = image.ybegin + (br + 1) * block_h;
+        const int bx_end = image.xbegin + (bc + 1) * block_w;
         WindowFitter fitter(in, opt, roi, acc, wsum);
-        GuideWeight lattice_guide(in, opt);
         BlockStats& st = block_stats[size_t(b)];
-        const int stride = opt.centre_stride;
-        for (int y = ya; y < yb; ++y) {
-            for (int x = xa; x < xb; ++x) {
-                if (!(in.cls[in.index(x, y)] & kFitPoint))
-                    continue;
-                if (stride > 1) {
-                    // Strided centres: a fit point is a centre when it is
-                    // on the lattice, or when its cell's lattice point
-                    // cannot speak for it (not a fit point, or another
-                    // surface), so that no surface is left without windows.
-                    const int lx = x - (x - image.xbegin) % stride;
-                    const int ly = y - (y - image.ybegin) % stride;
-                    if (lx != x || ly != y) {
-                        if (in.cls[in.index(lx, ly)] & kFitPoint) {
-                            lattice_guide.centre(lx, ly);
-                            if (lattice_guide(x, y) > 0.0f)
-                                continue;
-                        }
-                    }
-                }
-                int radius        = 0;
-                StopReason reason = fitter.process(x, y, radius);
-                if (!roi.contains(x, y))
-                    continue;
+        auto centre = [&](int x, int y) {
+            int radius        = 0;
+            StopReason reason = fitter.process(x, y, radius);
+            if (roi.contains(x, y)) {
                 ++st.windows;
                 st.radius_sum += radius;
                 st.stop_quality += reason == StopReason::Quality;
                 st.stop_size += reason == StopReason::Size;
                 st.stop_edge += reason == StopReason::Edge;
+            }
+            return reason;
+        };
+        const int stride = opt.centre_stride;
+        if (stride == 1) {
+            for (int y = ya; y < yb; ++y)
+                for (int x = xa; x < xb; ++x)
+                    if (in.cls[in.index(x, y)] & kFitPoint)
+                        centre(x, y);
+        } else {
+            // Strided centres (section 8): first the lattice points of the
+            // block, then every other fit point that the lattice windows
+            // around it cannot speak for: none of them is on its surface,
+            // or (stride_edges) one on its surface stopped at an edge. The
+            // block's sides are multiples of the stride, so a point and the
+            // lattice points around it are in one block, and the decision
+            // is the same for any tile, strip or thread count.
+            const int lxa = xa - (xa - image.xbegin) % stride;
+            const int lya = ya - (ya - image.ybegin) % stride;
+            auto lattice_end = [&](int last, int origin, int block_end, int image_end) {
+                const int up = last + (stride - (last - origin) % stride) % stride;
+                return std::min({ up + 1, block_end, image_end });
+            };
+            const int lxb = lattice_end(xb - 1, image.xbegin, bx_end, image.xend);
+            const int lyb = lattice_end(yb - 1, image.ybegin, by_end, image.yend);
+            const int nlx = (lxb - 1 - lxa) / stride + 1;
+            const int nly = (lyb - 1 - lya) / stride + 1;
+            enum LatticeWindow : uint8_t { kNone, kSmooth, kEdge };
+            std::vector<uint8_t> lattice(size_t(nlx) * size_t(nly), kNone);
+            for (int j = 0; j < nly; ++j)
+                for (int i = 0; i < nlx; ++i) {
+                    const int x = lxa + i * stride, y = lya + j * stride;
+                    if (in.cls[in.index(x, y)] & kFitPoint)
+                        lattice[size_t(j) * nlx + i]
+                            = centre(x, y) == StopReason::Edge && opt.stride_edges
+                                  ? kEdge
+                                  : kSmooth;
+                }
+            GuideWeight lattice_guide(in, opt);
+            for (int y = ya; y < yb; ++y) {
+                for (int x = xa; x < xb; ++x) {
+                    const int ox = (x - image.xbegin) % stride;
+                    const int oy = (y - image.ybegin) % stride;
+                    if ((ox == 0 && oy == 0) || !(in.cls[in.index(x, y)] & kFitPoint))
+                        continue;
+                    // The up to four lattice points of the cell around it.
+                    const int i0 = (x - ox - lxa) / stride;
+                    const int j0 = (y - oy - lya) / stride;
+                    bool covered = false, edge = false;
+                    for (int j = j0; j <= std::min(j0 + (oy != 0), nly - 1); ++j)
+                        for (int i = i0; i <= std::min(i0 + (ox != 0), nlx - 1); ++i) {
+                            const uint8_t l = lattice[size_t(j) * nlx + i];
+                            if (l == kNone)
+                                continue;
+                            lattice_guide.centre(lxa + i * stride, lya + j * stride);
+                            if (lattice_guide(x, y) > 0.0f) {
+                                covered = true;
+                                edge |= l == kEdge;
+                            }
+                        }
+                    if (edge || !covered)
+                        centre(x, y);
+                }
             }
         }
         const int64_t done = ++blocks_done;
@@ -949,8 +997,11 @@ filter_halo(const FilterOptions& options)
 {
     // Everything an output pixel depends on lies within 2*r_max (centres up
     // to r_max away, their windows r_max further) plus the noise estimate's
-    // footprint (3x3 residual, 5x5 median, 3x3 smoothing) of 4.
-    return 2 * std::max(options.r_max, 0) + 4;
+    // footprint (3x3 residual, 5x5 median, 3x3 smoothing) of 4. With a
+    // stride, the lattice points deciding a centre lie up to stride - 1
+    // further.
+    return 2 * std::max(options.r_max, 0) + 4
+           + std::max(options.centre_stride - 1, 0);
 }
 
 

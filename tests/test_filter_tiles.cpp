@@ -95,10 +95,13 @@ TEST(FilterTiles, StripsGivenTheFrameEqualTheWholeFrame)
     const ImageBuf normal = synth::shifted(s.normal, 3, -5);
     const ImageBuf depth = synth::shifted(s.depth, 3, -5);
     const ImageBuf ids = synth::shifted(s.object_id, 3, -5);
-    for (int stride : { 1, 3 }) {
+    const int strides[][2] = { { 1, 1 }, { 3, 1 }, { 3, 0 } };  // stride, edges
+    for (const auto& [stride, edges] : strides) {
+        SCOPED_TRACE(testing::Message() << "stride " << stride << " edges " << edges);
         zdenoise::FilterOptions opt;
         opt.r_max         = 6;
         opt.centre_stride = stride;
+        opt.stride_edges  = edges;
         zdenoise::Guides g;
         g.normal    = &normal;
         g.depth     = &depth;
@@ -108,7 +111,7 @@ TEST(FilterTiles, StripsGivenTheFrameEqualTheWholeFrame)
         ASSERT_FALSE(whole.has_error()) << whole.geterror();
 
         const int halo = zdenoise::filter_halo(opt);
-        EXPECT_EQ(halo, 2 * opt.r_max + 4);
+        EXPECT_EQ(halo, 2 * opt.r_max + 4 + stride - 1);
         opt.frame = noisy.roi();
         int64_t windows = 0;
         const ROI f = noisy.roi();

@@ -27,6 +27,7 @@ filter_option_names()
         { "normal-power", &FilterOptions::normal_power },
         { "quadrant-power", &FilterOptions::quadrant_power },
         { "stride", nullptr, &FilterOptions::centre_stride },
+        { "stride-edges", nullptr, &FilterOptions::stride_edges },
         { "radius-growth", &FilterOptions::radius_growth },
     };
     return names;
