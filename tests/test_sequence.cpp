@@ -193,7 +193,12 @@ TEST_F(Sequence, UsageErrorsAreOneLine)
     EXPECT_EQ(r.status, 2);
     EXPECT_NE(r.err.find("no frame pattern"), std::string::npos) << r.err;
     EXPECT_FALSE(Filesystem::exists(path("out.exr")));
-    for (const RunResult& e : { r, huge })
+    // Found by fuzz_frames: a tab after the dash slipped past the bound on
+    // the frames a list names, and OIIO would have enumerated them all.
+    const RunResult tab = zdenoise(sequence_args() + " --frames '1-\t1000000000'");
+    EXPECT_EQ(tab.status, 2);
+    EXPECT_NE(tab.err.find("is not a frame list"), std::string::npos) << tab.err;
+    for (const RunResult& e : { r, huge, tab })
         EXPECT_EQ(std::count(e.err.begin(), e.err.end(), '\n'), 1) << e.err;
 }
 

@@ -78,21 +78,28 @@ frame_path(const std::string& path, int frame)
 
 namespace {
 
-/// An upper bound on the frames `list` names: each comma item "A", "A-B",
-/// "A-BxN" or "A-ByN" counts |B - A| + 1 (a step only makes fewer). Items
-/// of another form count 1 and are left to OIIO to accept or refuse. A
-/// frame number beyond an int ("36377777763") counts as infinitely many:
-/// OIIO would clamp it to another frame without a word.
+/// An upper bound on the frames `list` names, or infinity when it is not a
+/// frame list: each comma item must be "A", "A-B", "A-BxN" or "A-ByN"
+/// (whitespace around the parts allowed, as OIIO allows it; N >= 1) and
+/// counts |B - A| + 1 (a step only makes fewer). Anything else is refused
+/// here rather than left to OIIO, so that no form ("1-\t1000000000") slips
+/// past the bound. A frame number beyond an int ("36377777763") is refused
+/// too: OIIO would clamp it to another frame without a word.
 double
 frame_count_bound(const std::string& list)
 {
-    double count = 0.0;
+    constexpr double refused = std::numeric_limits<double>::infinity();
+    const double int_max     = std::numeric_limits<int>::max();
+    double count             = 0.0;
     for (string_view item : Strutil::splitsv(list, ",")) {
-        item = Strutil::strip(item);
-        // A, then an optional "-B" (A and B may be negative).
         const char* p   = item.data();
         const char* end = p + item.size();
-        auto number     = [&](double& v) {
+        auto skip_space = [&] {
+            while (p < end && std::isspace(static_cast<unsigned char>(*p)))
+                ++p;
+        };
+        auto number = [&](double& v) {
+            skip_space();
             const char* q = p;
             if (q < end && (*q == '-' || *q == '+'))
                 ++q;
@@ -102,23 +109,26 @@ frame_count_bound(const std::string& list)
                 ++q;
             v = std::strtod(std::string(p, q).c_str(), nullptr);
             p = q;
-            return true;
+            skip_space();
+            return std::fabs(v) <= int_max;
         };
-        const double int_max = std::numeric_limits<int>::max();
-        double a = 0.0, b = 0.0;
-        const bool has_a = number(a);
-        if (has_a && std::fabs(a) > int_max)
-            return std::numeric_limits<double>::infinity();
-        if (has_a && p < end && *p == '-') {
+        double a = 0.0, b = 0.0, step = 1.0;
+        if (!number(a))
+            return refused;
+        b = a;
+        if (p < end && *p == '-') {
             ++p;
-            if (number(b)) {
-                if (std::fabs(b) > int_max)
-                    return std::numeric_limits<double>::infinity();
-                count += std::abs(b - a) + 1.0;
-                continue;
+            if (!number(b))
+                return refused;
+            if (p < end && (*p == 'x' || *p == 'y')) {
+                ++p;
+                if (!number(step) || step < 1.0)
+                    return refused;
             }
         }
-        count += 1.0;
+        if (p != end)
+            return refused;
+        count += std::abs(b - a) + 1.0;
     }
     return count;
 }
