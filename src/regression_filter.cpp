@@ -415,8 +415,10 @@ public:
     {
     }
 
-    /// Fit and splat the window of fit point (x0, y0).
-    StopReason process(int x0, int y0, int& radius);
+    /// Fit the window of fit point (x0, y0) and splat it (unless
+    /// splat_window is false: a strided lattice point of the next block,
+    /// fitted only for its stop reason).
+    StopReason process(int x0, int y0, int& radius, bool splat_window = true);
 
     /// The radius tried after R: R + 1, or R * radius_growth (at least
     /// R + 1), never beyond r_max.
@@ -695,7 +697,7 @@ WindowFitter::splat(const WindowFit& w)
 
 
 StopReason
-WindowFitter::process(int x0, int y0, int& radius)
+WindowFitter::process(int x0, int y0, int& radius, bool splat_window)
 {
     m_x0    = x0;
     m_y0    = y0;
@@ -727,7 +729,7 @@ WindowFitter::process(int x0, int y0, int& radius)
         previous = current;
     }
     radius = current.radius;
-    if (current.whole.present)
+    if (current.whole.present && splat_window)
         splat(current);
     return reason;
 }
@@ -845,10 +847,10 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
         const int bx_end = image.xbegin + (bc + 1) * block_w;
         WindowFitter fitter(in, opt, roi, acc, wsum);
         BlockStats& st = block_stats[size_t(b)];
-        auto centre = [&](int x, int y) {
+        auto centre = [&](int x, int y, bool splat_window = true) {
             int radius        = 0;
-            StopReason reason = fitter.process(x, y, radius);
-            if (roi.contains(x, y)) {
+            StopReason reason = fitter.process(x, y, radius, splat_window);
+            if (splat_window && roi.contains(x, y)) {
                 ++st.windows;
                 st.radius_sum += radius;
                 st.stop_quality += reason == StopReason::Quality;
@@ -866,19 +868,21 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
         } else {
             // Strided centres (section 8): first the lattice points of the
             // block, then every other fit point that the lattice windows
-            // around it cannot speak for: none of them is on its surface,
+            // of its cell cannot speak for: none of them is on its surface,
             // or (stride_edges) one on its surface stopped at an edge. The
-            // block's sides are multiples of the stride, so a point and the
-            // lattice points around it are in one block, and the decision
-            // is the same for any tile, strip or thread count.
+            // block's sides are multiples of the stride, so the lattice
+            // points of its cells are its own plus the first column and row
+            // of the next blocks, which are fitted here only to decide (the
+            // next blocks splat them). The decision is thus the same for any
+            // tile, strip or thread count.
             const int lxa = xa - (xa - image.xbegin) % stride;
             const int lya = ya - (ya - image.ybegin) % stride;
-            auto lattice_end = [&](int last, int origin, int block_end, int image_end) {
+            auto lattice_end = [&](int last, int origin, int image_end) {
                 const int up = last + (stride - (last - origin) % stride) % stride;
-                return std::min({ up + 1, block_end, image_end });
+                return std::min(up + 1, image_end);
             };
-            const int lxb = lattice_end(xb - 1, image.xbegin, bx_end, image.xend);
-            const int lyb = lattice_end(yb - 1, image.ybegin, by_end, image.yend);
+            const int lxb = lattice_end(xb - 1, image.xbegin, image.xend);
+            const int lyb = lattice_end(yb - 1, image.ybegin, image.yend);
             const int nlx = (lxb - 1 - lxa) / stride + 1;
             const int nly = (lyb - 1 - lya) / stride + 1;
             enum LatticeWindow : uint8_t { kNone, kSmooth, kEdge };
@@ -886,11 +890,13 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
             for (int j = 0; j < nly; ++j)
                 for (int i = 0; i < nlx; ++i) {
                     const int x = lxa + i * stride, y = lya + j * stride;
-                    if (in.cls[in.index(x, y)] & kFitPoint)
+                    if (in.cls[in.index(x, y)] & kFitPoint) {
+                        const bool own = x < bx_end && y < by_end;
                         lattice[size_t(j) * nlx + i]
-                            = centre(x, y) == StopReason::Edge && opt.stride_edges
+                            = centre(x, y, own) == StopReason::Edge && opt.stride_edges
                                   ? kEdge
                                   : kSmooth;
+                    }
                 }
             GuideWeight lattice_guide(in, opt);
             for (int y = ya; y < yb; ++y) {

@@ -642,88 +642,127 @@ Filter::run(RefStats* stats)
     // ---- section 3 ----
     compute_noise();
 
-    // ---- sections 5 and 6: centres in raster order ----
+    // ---- sections 5 and 6: centres in raster order (or strided) ----
     std::vector<double> acc(size_t(w) * h * 3, 0.0), wsum(size_t(w) * h, 0.0);
     double radius_sum = 0.0;
-    for (int y0 = 0; y0 < h; ++y0)
-        for (int x0 = 0; x0 < w; ++x0) {
-            if (!fitpt(x0, y0))
-                continue;
-            ++st.windows;
-            Window fin;
-            // Radii r_min, then max(R + 1, floor(R * radius_growth)) up
-            // to r_max; an edge steps back to the radius tried before.
-            int before = 0;
-            for (int R = opt.r_min;;) {
-                Window W = window(x0, y0, R);
-                if (W.edge) {
-                    fin = (R > opt.r_min) ? window(x0, y0, before) : W;
-                    ++st.stop_edge;
-                    break;
-                }
-                if (W.eta <= double(opt.eta_target)) {
-                    fin = W;
-                    ++st.stop_quality;
-                    break;
-                }
-                if (R == opt.r_max) {
-                    fin = W;
-                    ++st.stop_size;
-                    break;
-                }
-                before = R;
-                R = std::min(std::max(R + 1, int(float(R) * opt.radius_growth)), opt.r_max);
+    // One centre: its window grown and splatted; whether an edge stopped it.
+    auto centre = [&](int x0, int y0) {
+        ++st.windows;
+        bool edge = false;
+        Window fin;
+        // Radii r_min, then max(R + 1, floor(R * radius_growth)) up
+        // to r_max; an edge steps back to the radius tried before.
+        int before = 0;
+        for (int R = opt.r_min;;) {
+            Window W = window(x0, y0, R);
+            if (W.edge) {
+                fin = (R > opt.r_min) ? window(x0, y0, before) : W;
+                ++st.stop_edge;
+                edge = true;
+                break;
             }
-            radius_sum += fin.R;
-            if (!fin.whole.present) {
-                ++st.absent_windows;
-                continue;  // contributes nothing
+            if (W.eta <= double(opt.eta_target)) {
+                fin = W;
+                ++st.stop_quality;
+                break;
             }
-
-            // section 6: combination and splatting over W_R
-            const int R  = fin.R;
-            const double R2 = double(R) * R;
-            const int xa = std::max(x0 - R, 0), xb = std::min(x0 + R, w - 1);
-            const int ya = std::max(y0 - R, 0), yb = std::min(y0 + R, h - 1);
-            for (int yq = ya; yq <= yb; ++yq)
-                for (int xq = xa; xq <= xb; ++xq) {
-                    if (!surface(xq, yq))
-                        continue;
-                    if (!receiver(xq, yq, 0) && !receiver(xq, yq, 1)
-                        && !receiver(xq, yq, 2))
-                        continue;
-                    double gq = guide_weight(xq, yq, x0, y0);
-                    if (!(gq > 0.0))
-                        continue;
-                    int dx = xq - x0, dy = yq - y0;
-                    double u = double(dx) / R, v = double(dy) / R;
-                    int m = (dx >= 0 && dy >= 0) ? 0
-                          : (dx < 0 && dy >= 0)  ? 1
-                          : (dx < 0 && dy < 0)   ? 2
-                                                 : 3;
-                    double vt = fitpt(xq, yq) ? value_term(xq, yq, fin.m) : 0.0;
-                    double s  = gq * std::exp(-(vt + (dx * dx + dy * dy) / R2));
-                    for (int c = 0; c < 3; ++c) {
-                        double Z = fin.whole.at(c, u, v);
-                        double A = Z;
-                        if (fin.quad[m].present) {
-                            double Zm = fin.quad[m].at(c, u, v);
-                            double wm;
-                            if (Z * Zm < 0.0) {
-                                wm = 1e6;
-                            } else {
-                                double r = (std::abs(Z) + EPS) / (std::abs(Zm) + EPS);
-                                wm = std::min(std::pow(std::max(r, 1.0 / r),
-                                                       double(opt.quadrant_power)),
-                                              1e6);
-                            }
-                            A = (Z + wm * Zm) / (1.0 + wm);
-                        }
-                        acc[idx(xq, yq) * 3 + c] += s * A;
-                    }
-                    wsum[idx(xq, yq)] += s;
-                }
+            if (R == opt.r_max) {
+                fin = W;
+                ++st.stop_size;
+                break;
+            }
+            before = R;
+            R = std::min(std::max(R + 1, int(float(R) * opt.radius_growth)), opt.r_max);
         }
+        radius_sum += fin.R;
+        if (!fin.whole.present) {
+            ++st.absent_windows;
+            return edge;  // contributes nothing
+        }
+
+        // section 6: combination and splatting over W_R
+        const int R  = fin.R;
+        const double R2 = double(R) * R;
+        const int xa = std::max(x0 - R, 0), xb = std::min(x0 + R, w - 1);
+        const int ya = std::max(y0 - R, 0), yb = std::min(y0 + R, h - 1);
+        for (int yq = ya; yq <= yb; ++yq)
+            for (int xq = xa; xq <= xb; ++xq) {
+                if (!surface(xq, yq))
+                    continue;
+                if (!receiver(xq, yq, 0) && !receiver(xq, yq, 1)
+                    && !receiver(xq, yq, 2))
+                    continue;
+                double gq = guide_weight(xq, yq, x0, y0);
+                if (!(gq > 0.0))
+                    continue;
+                int dx = xq - x0, dy = yq - y0;
+                double u = double(dx) / R, v = double(dy) / R;
+                int m = (dx >= 0 && dy >= 0) ? 0
+                      : (dx < 0 && dy >= 0)  ? 1
+                      : (dx < 0 && dy < 0)   ? 2
+                                             : 3;
+                double vt = fitpt(xq, yq) ? value_term(xq, yq, fin.m) : 0.0;
+                double s  = gq * std::exp(-(vt + (dx * dx + dy * dy) / R2));
+                for (int c = 0; c < 3; ++c) {
+                    double Z = fin.whole.at(c, u, v);
+                    double A = Z;
+                    if (fin.quad[m].present) {
+                        double Zm = fin.quad[m].at(c, u, v);
+                        double wm;
+                        if (Z * Zm < 0.0) {
+                            wm = 1e6;
+                        } else {
+                            double r = (std::abs(Z) + EPS) / (std::abs(Zm) + EPS);
+                            wm = std::min(std::pow(std::max(r, 1.0 / r),
+                                                   double(opt.quadrant_power)),
+                                          1e6);
+                        }
+                        A = (Z + wm * Zm) / (1.0 + wm);
+                    }
+                    acc[idx(xq, yq) * 3 + c] += s * A;
+                }
+                wsum[idx(xq, yq)] += s;
+            }
+        return edge;
+    };
+    const int stride = opt.centre_stride;
+    if (stride == 1) {
+        for (int y0 = 0; y0 < h; ++y0)
+            for (int x0 = 0; x0 < w; ++x0)
+                if (fitpt(x0, y0))
+                    centre(x0, y0);
+    } else {
+        // Strided centres (docs/FILTER.md section 8), in two sweeps: the
+        // lattice, then each other fit point that no lattice point of its
+        // cell on its surface speaks for, or one of which stopped at an
+        // edge (stride_edges).
+        enum { kNone, kSmooth, kEdge };
+        std::vector<int> lattice(size_t(w) * h, kNone);
+        for (int y0 = 0; y0 < h; y0 += stride)
+            for (int x0 = 0; x0 < w; x0 += stride)
+                if (fitpt(x0, y0))
+                    lattice[idx(x0, y0)] = centre(x0, y0) && opt.stride_edges ? kEdge
+                                                                              : kSmooth;
+        for (int y0 = 0; y0 < h; ++y0)
+            for (int x0 = 0; x0 < w; ++x0) {
+                if ((x0 % stride == 0 && y0 % stride == 0) || !fitpt(x0, y0))
+                    continue;
+                bool covered = false, edge = false;
+                for (int dj = 0; dj <= (y0 % stride != 0); ++dj)
+                    for (int di = 0; di <= (x0 % stride != 0); ++di) {
+                        const int lx = x0 - x0 % stride + di * stride, ly = y0 - y0 % stride + dj * stride;
+                        if (lx >= w || ly >= h)
+                            continue;
+                        const int l = lattice[idx(lx, ly)];
+                        if (l != kNone && guide_weight(x0, y0, lx, ly) > 0.0) {
+                            covered = true;
+                            edge |= l == kEdge;
+                        }
+                    }
+                if (edge || !covered)
+                    centre(x0, y0);
+            }
+    }
 
     // ---- section 7: output ----
     RefImage out = z;

@@ -243,6 +243,32 @@ TEST(FilterReference, EdgeStopsAndQualityStopsWithLargerWindows)
     run_case(q);
 }
 
+// The speed option: lattice windows first, then the fit points near edges
+// or on surfaces the lattice misses (docs/FILTER.md section 8).
+TEST(FilterReference, StridedCentres)
+{
+    // 80x72 with r_max 8: blocks of 64 (66 at stride 3) columns by 32 (33)
+    // rows, so cells straddle block borders in x and y.
+    for (int stride : { 2, 3 })
+        for (int edges : { 1, 0 }) {
+            const std::string name = "stride " + std::to_string(stride) + ", edges "
+                                     + std::to_string(edges);
+            Case k{ "shadow edge, 16 spp, " + name, synth::shadow_edge(80, 72, { 16, 40 }) };
+            k.opt.r_max         = 8;
+            k.opt.centre_stride = stride;
+            k.opt.stride_edges  = edges;
+            run_case(k);
+            Case q{ "staircase, 32 spp, depth, normal, " + name,
+                    synth::staircase(80, 72, 5, { 32, 41 }) };
+            q.depth = q.normal = true;
+            q.opt.r_max         = 8;
+            q.opt.centre_stride = stride;
+            q.opt.stride_edges  = edges;
+            q.whole_denoise     = true;
+            run_case(q);
+        }
+}
+
 TEST(FilterReference, GeometricRadiusGrowth)
 {
     // radius_growth 1.5 tries radii 2, 3, 4, 6, 8 and 2 tries 2, 4, 8 (up
