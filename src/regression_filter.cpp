@@ -769,10 +769,9 @@ check_options(ImageBuf& dst, const FilterOptions& o)
         return bad("normal_power", o.normal_power, "needs a finite number > 0");
     if (!(o.radius_growth >= 1.0f && o.radius_growth <= 4.0f))
         return bad("radius_growth", o.radius_growth, "needs 1 <= radius_growth <= 4");
-    if (o.centre_stride < 1 || o.centre_stride > o.r_min + 1)
+    if (o.centre_stride < 1 || o.centre_stride > 64)
         return bad("centre_stride", o.centre_stride,
-                   "needs 1 <= centre_stride <= r_min + 1 (windows must "
-                   "overlap)");
+                   "needs 1 <= centre_stride <= 64");
     if (o.stride_edges != 0 && o.stride_edges != 1)
         return bad("stride_edges", o.stride_edges, "needs 0 or 1");
     if (!finite_nonneg(o.quadrant_power))
@@ -781,6 +780,16 @@ check_options(ImageBuf& dst, const FilterOptions& o)
     return true;
 }
 
+
+
+/// The stride the filter uses: centre_stride, at most r_min + 1 so that the
+/// smallest windows of neighbouring lattice points still overlap (r_min 1
+/// with the default stride 3 means stride 2, not an error).
+int
+effective_stride(const FilterOptions& o)
+{
+    return std::max(1, std::min(o.centre_stride, std::max(o.r_min, 1) + 1));
+}
 
 
 /// Totals over the tiles of one call.
@@ -823,7 +832,7 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
     // Blocks, not whole strips of rows, so that a phase has enough of them
     // to keep every thread busy to its end (section 8).
     // With a stride, multiples of it.
-    const int s_ = opt.centre_stride;
+    const int s_ = effective_stride(opt);
     const int block_h = (std::max(2 * opt.r_max + 1, 32) + s_ - 1) / s_ * s_;
     const int block_w = (std::max(2 * opt.r_max + 1, 64) + s_ - 1) / s_ * s_;
     const int first_row = (cy0 - image.ybegin) / block_h;
@@ -859,7 +868,7 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
             }
             return reason;
         };
-        const int stride = opt.centre_stride;
+        const int stride = s_;
         if (stride == 1) {
             for (int y = ya; y < yb; ++y)
                 for (int x = xa; x < xb; ++x)
@@ -1007,7 +1016,7 @@ filter_halo(const FilterOptions& options)
     // stride, the lattice points deciding a centre lie up to stride - 1
     // further.
     return 2 * std::max(options.r_max, 0) + 4
-           + std::max(options.centre_stride - 1, 0);
+           + effective_stride(options) - 1;
 }
 
 

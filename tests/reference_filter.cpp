@@ -725,7 +725,7 @@ Filter::run(RefStats* stats)
             }
         return edge;
     };
-    const int stride = opt.centre_stride;
+    const int stride = std::max(1, std::min(opt.centre_stride, std::max(opt.r_min, 1) + 1));
     if (stride == 1) {
         for (int y0 = 0; y0 < h; ++y0)
             for (int x0 = 0; x0 < w; ++x0)

@@ -133,7 +133,8 @@ zdenoise::FilterOptions
 small_options()
 {
     zdenoise::FilterOptions opt;
-    opt.r_max = 5;
+    opt.r_max         = 5;
+    opt.centre_stride = 1;  // the exact filter; StridedCentres has the rest
     return opt;
 }
 

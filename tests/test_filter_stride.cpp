@@ -1,9 +1,9 @@
 // Copyright zdenoise contributors.
 // SPDX-License-Identifier: BSD-3-Clause
 //
-// The strided-centre speed option (FilterOptions::centre_stride): as
-// deterministic as the exact filter, every surface still filtered, and
-// close to the exact filter's quality.
+// Strided centres (FilterOptions::centre_stride, 3 by default; 1 is the
+// exact filter): as deterministic as the exact filter, every surface still
+// filtered, and close to the exact filter's quality.
 
 #include <cmath>
 #include <cstring>
@@ -66,7 +66,7 @@ TEST(FilterStride, SameResultForAnyThreadCountAndRoi)
 TEST(FilterStride, QualityCloseToTheExactFilter)
 {
     synth::Scene s = synth::fine_texture(96, 96, { 8, 99 });
-    ImageBuf exact = zdenoise::denoise(s.noisy, s.albedo);
+    ImageBuf exact = zdenoise::denoise(s.noisy, s.albedo, {}, strided(1));
     ImageBuf fast  = zdenoise::denoise(s.noisy, s.albedo, {}, strided(3, 0));
     ASSERT_FALSE(fast.has_error()) << fast.geterror();
     const double noisy_err = synth::rel_mse(s.noisy, s.clean);
@@ -90,7 +90,7 @@ TEST(FilterStride, WithEdgesCloseToTheExactFilterWithHalfTheWindows)
     g.normal = &s.normal;
     g.depth  = &s.depth;
     zdenoise::FilterStats exact_stats, edge_stats, lattice_stats;
-    ImageBuf exact   = zdenoise::denoise(s.noisy, s.albedo, g, {}, &exact_stats);
+    ImageBuf exact   = zdenoise::denoise(s.noisy, s.albedo, g, strided(1), &exact_stats);
     ImageBuf edges   = zdenoise::denoise(s.noisy, s.albedo, g, strided(3, 1), &edge_stats);
     ImageBuf lattice = zdenoise::denoise(s.noisy, s.albedo, g, strided(3, 0), &lattice_stats);
     ASSERT_FALSE(edges.has_error()) << edges.geterror();
@@ -122,4 +122,20 @@ TEST(FilterStride, ThinObjectsOffTheLatticeAreStillFiltered)
     ASSERT_FALSE(out.has_error()) << out.geterror();
     EXPECT_EQ(stats.passthrough_pixels, 0) << "every pixel must receive a fit";
     EXPECT_LT(synth::rel_mse(out, s.clean) * 3.0, synth::rel_mse(s.noisy, s.clean));
+}
+
+
+TEST(FilterStride, SmallRMinUsesASmallerStrideNotAnError)
+{
+    // --rmin 1 with the default stride 3: windows of radius 1 on a stride-3
+    // lattice would not overlap, so the filter uses stride 2, exactly.
+    synth::Scene s = synth::fine_texture(40, 40, { 8, 12 });
+    zdenoise::FilterOptions three = strided(3), two = strided(2);
+    three.r_min = two.r_min = 1;
+    ImageBuf a = zdenoise::denoise(s.noisy, s.albedo, {}, three);
+    ImageBuf b = zdenoise::denoise(s.noisy, s.albedo, {}, two);
+    ASSERT_FALSE(a.has_error()) << a.geterror();
+    std::vector<float> pa = synth::pixels(a), pb = synth::pixels(b);
+    EXPECT_EQ(std::memcmp(pa.data(), pb.data(), pa.size() * sizeof(float)), 0);
+    EXPECT_EQ(zdenoise::filter_halo(three), zdenoise::filter_halo(two));
 }

@@ -78,15 +78,18 @@ struct FilterOptions {
     float normal_power = 4.0f;
     /// Exponent of the quadrant weight w_m = max(Z/Zm, Zm/Z)^quadrant_power.
     float quadrant_power = 8.0f;
-    /// Speed option: fit windows only at every centre_stride-th pixel in x
-    /// and y, plus every fit point that none of the lattice points around
-    /// it is on the surface of; splatting covers the pixels between. 1 =
-    /// the exact filter (docs/PERFORMANCE.md "Speed options").
-    int centre_stride = 1;
+    /// Fit windows only at every centre_stride-th pixel in x and y (the
+    /// lattice), plus every fit point that none of the lattice points of
+    /// its cell is on the surface of; splatting covers the pixels between.
+    /// 1 = every fit point a centre: the exact filter, twice as slow. The
+    /// default 3 is within 2 % of its relMSE on every case of the public
+    /// benchmark (docs/PERFORMANCE.md "Strided centres"). A stride beyond
+    /// r_min + 1 is used as r_min + 1, so that windows always overlap.
+    int centre_stride = 3;
     /// With centre_stride > 1: 1 = a fit point is also a centre when a
-    /// lattice window around it on its surface stopped at an edge (detail
-    /// keeps every window; public-set relMSE within 2 % of the exact filter
-    /// at stride 3); 0 = the lattice only (fastest, up to 15 % worse).
+    /// lattice window of its cell on its surface stopped at an edge (detail
+    /// keeps every window); 0 = the lattice only (2.7x faster again, up to
+    /// 27 % worse relMSE: a preview setting).
     int stride_edges = 1;
     /// The radius tried after R: max(R + 1, floor(R * radius_growth)), up
     /// to r_max; an edge steps back to the radius tried before. 1 is
@@ -113,7 +116,8 @@ struct FilterOptions {
     ROI frame;
 
     /// The defaults of ALGORITHM.md section 8 (edge_k 3, value_k 2,
-    /// sigma_good 1, radius_growth 1), before tuning on data.
+    /// sigma_good 1, radius_growth 1, every fit point a centre), before
+    /// tuning on data.
     static FilterOptions algorithm_defaults()
     {
         FilterOptions o;
@@ -121,6 +125,7 @@ struct FilterOptions {
         o.value_k    = 2.0f;
         o.sigma_good = 1.0f;
         o.radius_growth = 1.0f;
+        o.centre_stride = 1;
         return o;
     }
 };

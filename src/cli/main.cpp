@@ -130,12 +130,11 @@ Filter parameters (docs/FILTER.md):
   --quadrant-power X   Quadrant weight exponent (8)
   --radius-growth X    Radius tried after R: max(R+1, R*X) (2: radii 2, 4, 8,
                        16; 1 = ALGORITHM.md's R+1, as --preset spec)
-  --stride N           Speed option: fit windows at every N-th pixel only,
-                       and at every pixel near an edge (1 = the exact
-                       filter; 3: 1.6x faster, within 2% of its relMSE;
-                       see docs/PERFORMANCE.md)
-  --stride-edges 0|1   0: with --stride, the lattice only, also at edges
-                       (3: 4x faster, up to 15% worse relMSE) (1)
+  --stride N           Fit windows at every N-th pixel, and at every pixel
+                       near an edge (3; 1 = the exact filter, half as fast,
+                       within 2% of the same relMSE; docs/PERFORMANCE.md)
+  --stride-edges 0|1   0: the lattice only, also at edges (preview: 2.7x
+                       faster again, up to 27% worse relMSE) (1)
 
 Frame sequences (oiiotool's conventions) and batches:
   --frames LIST        Frames to denoise: 1001-1100, 1-99x2 (every 2nd),
