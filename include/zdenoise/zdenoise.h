@@ -81,14 +81,14 @@ struct FilterOptions {
     /// Fit windows only at every centre_stride-th pixel in x and y (the
     /// lattice), plus every fit point that none of the lattice points of
     /// its cell is on the surface of; splatting covers the pixels between.
-    /// 1 = every fit point a centre: the exact filter, twice as slow. The
+    /// 1 = every fit point a centre: the exact filter, 1.5x as slow. The
     /// default 3 is within 2 % of its relMSE on every case of the public
     /// benchmark (docs/PERFORMANCE.md "Strided centres"). A stride beyond
     /// r_min + 1 is used as r_min + 1, so that windows always overlap.
     int centre_stride = 3;
     /// With centre_stride > 1: 1 = a fit point is also a centre when a
     /// lattice window of its cell on its surface stopped at an edge (detail
-    /// keeps every window); 0 = the lattice only (2.7x faster again, up to
+    /// keeps every window); 0 = the lattice only (2x faster again, up to
     /// 27 % worse relMSE: a preview setting).
     int stride_edges = 1;
     /// The radius tried after R: max(R + 1, floor(R * radius_growth)), up

@@ -131,9 +131,9 @@ Filter parameters (docs/FILTER.md):
   --radius-growth X    Radius tried after R: max(R+1, R*X) (2: radii 2, 4, 8,
                        16; 1 = ALGORITHM.md's R+1, as --preset spec)
   --stride N           Fit windows at every N-th pixel, and at every pixel
-                       near an edge (3; 1 = the exact filter, half as fast,
+                       near an edge (3; 1 = the exact filter, 1.5x as slow,
                        within 2% of the same relMSE; docs/PERFORMANCE.md)
-  --stride-edges 0|1   0: the lattice only, also at edges (preview: 2.7x
+  --stride-edges 0|1   0: the lattice only, also at edges (preview: 2x
                        faster again, up to 27% worse relMSE) (1)
 
 Frame sequences (oiiotool's conventions) and batches:
