@@ -832,9 +832,9 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
     // Blocks, not whole strips of rows, so that a phase has enough of them
     // to keep every thread busy to its end (section 8).
     // With a stride, multiples of it.
-    const int s_ = effective_stride(opt);
-    const int block_h = (std::max(2 * opt.r_max + 1, 32) + s_ - 1) / s_ * s_;
-    const int block_w = (std::max(2 * opt.r_max + 1, 64) + s_ - 1) / s_ * s_;
+    const int stride  = effective_stride(opt);
+    const int block_h = (std::max(2 * opt.r_max + 1, 32) + stride - 1) / stride * stride;
+    const int block_w = (std::max(2 * opt.r_max + 1, 64) + stride - 1) / stride * stride;
     const int first_row = (cy0 - image.ybegin) / block_h;
     const int first_col = (cx0 - image.xbegin) / block_w;
     const int nrows = cy1 > cy0 ? (cy1 - 1 - image.ybegin) / block_h - first_row + 1
@@ -868,7 +868,6 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
             }
             return reason;
         };
-        const int stride = s_;
         if (stride == 1) {
             for (int y = ya; y < yb; ++y)
                 for (int x = xa; x < xb; ++x)

@@ -45,6 +45,17 @@ one_frame_conversion(const std::string& pattern)
     return conversions == 1;
 }
 
+/// OIIO's reading of `path` as a frame pattern: its printf-style pattern
+/// and any frame list in the name; false when it is not one, or not one
+/// OIIO can format safely.
+bool
+frame_pattern(const std::string& path, std::string& printf_pattern,
+              std::string& frames)
+{
+    return Filesystem::parse_pattern(path.c_str(), 0, printf_pattern, frames)
+           && one_frame_conversion(printf_pattern);
+}
+
 }  // namespace
 
 
@@ -52,8 +63,7 @@ bool
 has_frame_pattern(const std::string& path, std::string* frames_in_name)
 {
     std::string printf_pattern, frames;
-    if (!Filesystem::parse_pattern(path.c_str(), 0, printf_pattern, frames)
-        || !one_frame_conversion(printf_pattern))
+    if (!frame_pattern(path, printf_pattern, frames))
         return false;
     if (frames_in_name && !frames.empty())
         *frames_in_name = frames;
@@ -66,8 +76,7 @@ frame_path(const std::string& path, int frame)
 {
     std::string printf_pattern, frames;
     std::vector<std::string> names;
-    if (!Filesystem::parse_pattern(path.c_str(), 0, printf_pattern, frames)
-        || !one_frame_conversion(printf_pattern)
+    if (!frame_pattern(path, printf_pattern, frames)
         || !Filesystem::enumerate_file_sequence(printf_pattern, { frame },
                                                 names)
         || names.size() != 1)
