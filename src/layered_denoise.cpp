@@ -35,24 +35,6 @@ layer_guides(const Guides& shared, const Guides& own)
 }
 
 
-void
-add_stats(FilterStats& total, const FilterStats& s)
-{
-    const int64_t windows = total.windows + s.windows;
-    if (windows > 0)
-        total.mean_radius = (total.mean_radius * double(total.windows)
-                             + s.mean_radius * double(s.windows))
-                            / double(windows);
-    total.pixels += s.pixels;
-    total.windows = windows;
-    total.stop_quality += s.stop_quality;
-    total.stop_size += s.stop_size;
-    total.stop_edge += s.stop_edge;
-    total.passthrough_pixels += s.passthrough_pixels;
-    total.nonfinite_pixels += s.nonfinite_pixels;
-}
-
-
 /// A layer's light is never negative, but on a steep convex ramp (the
 /// ceiling right next to a light) the filter's planes can extrapolate below
 /// 0; in a sum of layers that shows as a dark seam. Clamp it away.
@@ -201,7 +183,7 @@ layered_denoise(ImageBuf& dst, const std::vector<Layer>& layers,
         if (layer.stats)
             *layer.stats = layer_stats;
         if (stats && layer.filter)
-            add_stats(*stats, layer_stats);
+            stats->merge(layer_stats);
     }
     return true;
 }

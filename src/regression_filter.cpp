@@ -1090,7 +1090,8 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         st.stop_quality       = totals.windows.stop_quality;
         st.stop_size          = totals.windows.stop_size;
         st.stop_edge          = totals.windows.stop_edge;
-        st.mean_radius        = st.windows ? double(totals.windows.radius_sum) / st.windows
+        st.radius_sum         = totals.windows.radius_sum;
+        st.mean_radius        = st.windows ? double(st.radius_sum) / st.windows
                                            : 0.0;
         st.pixels             = totals.pixels;
         st.passthrough_pixels = totals.passthrough;

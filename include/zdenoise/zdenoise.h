@@ -161,9 +161,27 @@ struct FilterStats {
     int64_t stop_size = 0;           ///< windows stopped by r_max
     int64_t stop_edge = 0;           ///< windows stopped by strong variation
     double mean_radius = 0.0;        ///< mean final half-size of the windows
+    int64_t radius_sum = 0;          ///< sum of the final half-sizes (exact)
     int64_t passthrough_pixels = 0;  ///< pixels with >= 1 RGB channel passed through
     int64_t nonfinite_pixels = 0;    ///< pixels with a non-finite RGB value in
                                      ///< the input (repaired or set to 0)
+
+    /// Add the statistics of other pixels (another tile, strip or layer):
+    /// counts add, and mean_radius is radius_sum / windows again, so the
+    /// totals do not depend on how the work was split.
+    FilterStats& merge(const FilterStats& other)
+    {
+        pixels += other.pixels;
+        windows += other.windows;
+        stop_quality += other.stop_quality;
+        stop_size += other.stop_size;
+        stop_edge += other.stop_edge;
+        radius_sum += other.radius_sum;
+        passthrough_pixels += other.passthrough_pixels;
+        nonfinite_pixels += other.nonfinite_pixels;
+        mean_radius = windows ? double(radius_sum) / double(windows) : 0.0;
+        return *this;
+    }
 };
 
 

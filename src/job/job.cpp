@@ -1270,8 +1270,7 @@ run(Job j, OutputSink& sink, JobResult& result)
 
     // Statistics summed over the strips; the mean radius from the exact
     // sum of radii, so that it does not depend on the strips.
-    int64_t radius_sum = 0;
-    std::vector<int64_t> layer_windows, layer_radius_sums;
+    std::vector<FilterStats> layer_stats;
     Strip strip;
     strip.files   = &files;
     strip.threads = j.threads;
@@ -1352,22 +1351,10 @@ run(Job j, OutputSink& sink, JobResult& result)
             fail(format("denoising '{}' failed: {}", j.in.path,
                         one_line(denoised.geterror())));
         result.denoise_seconds += denoise_timer();
-        result.stats.pixels += st.pixels;
-        result.stats.windows += st.windows;
-        result.stats.stop_quality += st.stop_quality;
-        result.stats.stop_size += st.stop_size;
-        result.stats.stop_edge += st.stop_edge;
-        result.stats.passthrough_pixels += st.passthrough_pixels;
-        result.stats.nonfinite_pixels += st.nonfinite_pixels;
-        radius_sum += std::llround(st.mean_radius * double(st.windows));
-        layer_windows.resize(loaded.stats.size(), 0);
-        layer_radius_sums.resize(loaded.stats.size(), 0);
-        for (size_t i = 0; i < loaded.stats.size(); ++i) {
-            const FilterStats& ls = loaded.stats[i];
-            layer_windows[i] += ls.windows;
-            layer_radius_sums[i] += std::llround(ls.mean_radius
-                                                 * double(ls.windows));
-        }
+        result.stats.merge(st);
+        layer_stats.resize(loaded.stats.size());
+        for (size_t i = 0; i < loaded.stats.size(); ++i)
+            layer_stats[i].merge(loaded.stats[i]);
 
         Timer write_timer;
         if (managed)
@@ -1378,17 +1365,10 @@ run(Job j, OutputSink& sink, JobResult& result)
         output.write(strip, files.rows(j.in.path), images, j.threads);
         result.write_seconds += write_timer();
     }
-    result.stats.mean_radius = result.stats.windows
-                                   ? double(radius_sum)
-                                         / double(result.stats.windows)
-                                   : 0.0;
     if (j.write_layers)
-        for (size_t i = 0; i < layer_windows.size(); ++i) {
+        for (size_t i = 0; i < layer_stats.size(); ++i) {
             const std::string& n = layers_plan.layers[i].name;
-            const double mean    = layer_windows[i]
-                                       ? double(layer_radius_sums[i])
-                                             / double(layer_windows[i])
-                                       : 0.0;
+            const double mean    = layer_stats[i].mean_radius;
             result.log.push_back(format(
                 "  layer {} written as {}.R,G,B (mean radius {:.2f})", n, n,
                 mean));
