@@ -3,7 +3,11 @@
 //
 // The per-pixel planes the regression filter works on: the quotient, its
 // pixel classes, noise estimate and guides, decoded once into contiguous
-// float arrays over a region (the output ROI plus the filter's halo).
+// float arrays over a region (the output ROI plus the filter's halo), and
+// the stages that decode them (docs/FILTER.md sections 2-4):
+// decode_filter_inputs() runs classify_pixels() (pixel_classes.cpp),
+// decode_normals() and decode_object_ids() (guide_weight.cpp) and
+// estimate_noise() (noise_estimate.cpp).
 
 #pragma once
 
@@ -13,8 +17,17 @@
 
 #include <zdenoise/zdenoise.h>
 
+#include <OpenImageIO/imagebufalgo_util.h>
+
 namespace zdenoise {
 namespace detail {
+
+using OIIO::ImageBuf;
+using OIIO::ROI;
+
+/// The smallest magnitude a mean or value is divided by (docs/FILTER.md:
+/// EPS).
+constexpr double kEps = 1e-8;
 
 /// Pixel class bits (docs/FILTER.md section 2).
 enum PixelClass : uint8_t {
@@ -103,6 +116,20 @@ struct FilterInputs {
     }
 };
 
+/// Channels [chbegin, chend) of `img` over `region` as floats.
+std::vector<float>
+read_channels(const ImageBuf& img, ROI region, int chbegin, int chend);
+
+/// Run `row(y)` for every row of the region, in parallel.
+template<class F>
+void
+for_rows(const ROI& region, int nthreads, F&& row)
+{
+    OIIO::parallel_for(int64_t(region.ybegin), int64_t(region.yend),
+                       [&](int64_t y) { row(int(y)); },
+                       OIIO::paropt(nthreads));
+}
+
 /// Decode the quotient, albedo and guides over `region` and estimate the
 /// noise (docs/FILTER.md sections 2-3). Guides must have been checked to
 /// cover the region. Returns false (message in dst) on bad guide shapes.
@@ -111,41 +138,16 @@ decode_filter_inputs(FilterInputs& in, ImageBuf& dst, const ImageBuf& quotient,
                      const ImageBuf& albedo, const Guides& guides,
                      const FilterOptions& opt, ROI region, int nthreads);
 
-/// The guide weight g(q; p0) of docs/FILTER.md section 4, with what depends
-/// on the centre alone computed once per centre.
-class GuideWeight {
-public:
-    GuideWeight(const FilterInputs& in, const FilterOptions& opt)
-        : m_in(in)
-        , m_cut(opt.normal_cut)
-        , m_power(opt.normal_power)
-        , m_depth_tol(opt.depth_tolerance)
-    {
-    }
-
-    /// Set the centre p0.
-    void centre(int x0, int y0);
-
-    /// g(q; p0) for a surface pixel q = (x, y).
-    float operator()(int x, int y) const
-    {
-        float g;
-        row(x, y, 1, &g);
-        return g;
-    }
-
-    /// g(q; p0) of the n pixels from (x, y) along row y into g[0, n), 0 for
-    /// pixels that are no surface.
-    void row(int x, int y, int n, float* g) const;
-
-private:
-    const FilterInputs& m_in;
-    float m_cut, m_power, m_depth_tol;
-    int m_x0 = 0, m_y0 = 0;
-    size_t m_i0 = 0;
-    float m_zeta0 = 0, m_gx = 0, m_gy = 0;
-    float m_id0 = 0;  ///< the centre's plain id
-};
+/// The pixel classes of section 2 (in.cls), the luminance zl of the fit
+/// points and the inverse depth of the surface pixels, from the RGB
+/// quotient z and albedo (3 floats a pixel), the alpha (empty: none) and
+/// the depth (empty: none) over in.region.
+void
+classify_pixels(FilterInputs& in, const std::vector<float>& z,
+                const std::vector<float>& albedo,
+                const std::vector<float>& alpha,
+                const std::vector<float>& depth, float albedo_eps,
+                int nthreads);
 
 }  // namespace detail
 }  // namespace zdenoise

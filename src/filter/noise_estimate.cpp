@@ -1,0 +1,246 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// The noise estimate (docs/FILTER.md section 3): one function per source of
+// the variance, and the smoothing the fit reads.
+
+#include "noise_estimate.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "internal.h"
+
+namespace zdenoise {
+namespace detail {
+
+namespace {
+
+// Median of the chi-square distribution with one degree of freedom: turns
+// the median of squared residuals into a variance.
+constexpr float kChi2Median = 0.4549364f;
+
+constexpr float kUndefined = std::numeric_limits<float>::quiet_NaN();
+
+bool
+fit_point(const FilterInputs& in, size_t i)
+{
+    return (in.cls[i] & kFitPoint) != 0;
+}
+
+/// The variance of pixel i's quotient luminance from the radiance's
+/// per-channel variances varL (one value when stride is 1): their
+/// luminance-weighted mean, each divided by the squared albedo.
+float
+quotient_variance(const std::vector<float>& albedo, float eps_a, size_t i,
+                  const float* varL, int stride)
+{
+    float v = 0.0f;
+    for (int c = 0; c < 3; ++c) {
+        const float vl = varL[stride == 1 ? 0 : c];
+        const float a  = albedo[3 * i + c] + eps_a;
+        v += kLumaWeights[c] * vl / (a * a);
+    }
+    return (std::isfinite(v) && v >= 0.0f) ? v : kUndefined;
+}
+
+/// Are two pixels on the same surface for the noise estimate: same (plain
+/// or primary Cryptomatte) id, and close normals when normals are given.
+bool
+same_surface(const FilterInputs& in, size_t a, size_t b)
+{
+    if (!in.normal.empty()) {
+        const float* na = &in.normal[3 * a];
+        const float* nb = &in.normal[3 * b];
+        const bool za = no_normal(na), zb = no_normal(nb);
+        if (za != zb)
+            return false;
+        if (!za && na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2] <= 0.9f)
+            return false;
+    }
+    if (in.id_pairs == -1)
+        return same_id(in.ids[a], in.ids[b]);
+    if (in.id_pairs > 0) {
+        // Primary id: the rank of largest coverage (the first of equals).
+        auto primary = [&](size_t i, float& id) {
+            const float* p = &in.ids[size_t(2 * in.id_pairs) * i];
+            float best     = 0.0f;
+            bool any       = false;
+            for (int k = 0; k < in.id_pairs; ++k)
+                if (p[2 * k + 1] > best) {
+                    best = p[2 * k + 1];
+                    id   = p[2 * k];
+                    any  = true;
+                }
+            return any;
+        };
+        float ida = 0, idb = 0;
+        const bool ha = primary(a, ida), hb = primary(b, idb);
+        if (ha != hb || (ha && !same_id(ida, idb)))
+            return false;
+    }
+    return true;
+}
+
+}  // namespace
+
+
+RawVariance
+variance_from_guide(const FilterInputs& in, const ImageBuf& variance,
+                    const std::vector<float>& albedo, float albedo_eps)
+{
+    const size_t npix = in.region.npixels();
+    RawVariance var(npix, kUndefined);
+    const int nch = variance.nchannels() >= 3 ? 3 : 1;
+    std::vector<float> vl = read_channels(variance, in.region, 0, nch);
+    for (size_t i = 0; i < npix; ++i)
+        if (fit_point(in, i))
+            var[i] = quotient_variance(albedo, albedo_eps, i,
+                                       &vl[size_t(nch) * i], nch);
+    return var;
+}
+
+
+RawVariance
+variance_from_halves(const FilterInputs& in, const ImageBuf& half_a,
+                     const ImageBuf& half_b, const std::vector<float>& albedo,
+                     float albedo_eps)
+{
+    const size_t npix = in.region.npixels();
+    RawVariance var(npix, kUndefined);
+    std::vector<float> a = read_channels(half_a, in.region, 0, 3);
+    std::vector<float> b = read_channels(half_b, in.region, 0, 3);
+    for (size_t i = 0; i < npix; ++i) {
+        if (!fit_point(in, i))
+            continue;
+        float vl[3];
+        for (int c = 0; c < 3; ++c) {
+            const float d = a[3 * i + c] - b[3 * i + c];
+            vl[c]         = 0.25f * d * d;
+        }
+        var[i] = quotient_variance(albedo, albedo_eps, i, vl, 3);
+    }
+    return var;
+}
+
+
+RawVariance
+variance_from_image(const FilterInputs& in, int nthreads)
+{
+    const size_t npix = in.region.npixels();
+    RawVariance var(npix, kUndefined);
+    auto fit = [&](size_t i) { return fit_point(in, i); };
+    const float nan = kUndefined;
+    // Estimated from z: squared residuals against the 8-neighbour mean
+    // on the same surface, then a robust (median) 5x5 estimate.
+    std::vector<float> resid(npix, nan);
+    for_rows(in.region, nthreads, [&](int y) {
+        for (int x = in.region.xbegin; x < in.region.xend; ++x) {
+            const size_t i = in.index(x, y);
+            if (!fit(i))
+                continue;
+            double sum = 0.0;
+            int n      = 0;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    if ((dx | dy) == 0 || !in.in_region(x + dx, y + dy))
+                        continue;
+                    const size_t j = in.index(x + dx, y + dy);
+                    if (fit(j) && same_surface(in, i, j)) {
+                        sum += in.zl[j];
+                        ++n;
+                    }
+                }
+            if (n > 0) {
+                const double r = in.zl[i] - sum / n;
+                resid[i]       = float(r * r * n / (n + 1));
+            }
+        }
+    });
+    for_rows(in.region, nthreads, [&](int y) {
+        float window[25];
+        for (int x = in.region.xbegin; x < in.region.xend; ++x) {
+            const size_t i = in.index(x, y);
+            if (!fit(i))
+                continue;
+            int n = 0;
+            for (int dy = -2; dy <= 2; ++dy)
+                for (int dx = -2; dx <= 2; ++dx)
+                    if (in.in_region(x + dx, y + dy)) {
+                        const float e = resid[in.index(x + dx, y + dy)];
+                        if (!std::isnan(e))
+                            window[n++] = e;
+                    }
+            if (n == 0) {
+                var[i] = 0.0f;
+                continue;
+            }
+            // Median; for an even count, the mean of the middle two.
+            std::sort(window, window + n);
+            const float med = (n & 1) ? window[n / 2]
+                                      : 0.5f
+                                            * (window[n / 2 - 1]
+                                               + window[n / 2]);
+            var[i] = med / kChi2Median;
+        }
+    });
+    return var;
+}
+
+
+void
+smooth_noise(FilterInputs& in, const RawVariance& var, int nthreads)
+{
+    const size_t npix = in.region.npixels();
+    auto fit = [&](size_t i) { return fit_point(in, i); };
+    in.vs.assign(npix, 0.0f);
+    in.sigma.assign(npix, 0.0f);
+    for_rows(in.region, nthreads, [&](int y) {
+        for (int x = in.region.xbegin; x < in.region.xend; ++x) {
+            const size_t i = in.index(x, y);
+            if (!fit(i))
+                continue;
+            double vsum = 0.0, zsum = 0.0;
+            int nv = 0, nz = 0;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    if (!in.in_region(x + dx, y + dy))
+                        continue;
+                    const size_t j = in.index(x + dx, y + dy);
+                    if (!fit(j))
+                        continue;
+                    zsum += in.zl[j];
+                    ++nz;
+                    if (!std::isnan(var[j])) {
+                        vsum += var[j];
+                        ++nv;
+                    }
+                }
+            const float vs = nv ? float(vsum / nv) : 0.0f;
+            const float zs = float(zsum / nz);
+            in.vs[i]       = vs;
+            in.sigma[i]    = std::sqrt(vs) / std::max(std::fabs(zs), float(kEps));
+        }
+    });
+}
+
+
+void
+estimate_noise(FilterInputs& in, const Guides& guides,
+               const std::vector<float>& albedo, float albedo_eps,
+               int nthreads)
+{
+    RawVariance var;
+    if (guides.variance)
+        var = variance_from_guide(in, *guides.variance, albedo, albedo_eps);
+    else if (guides.half_a && guides.half_b)
+        var = variance_from_halves(in, *guides.half_a, *guides.half_b, albedo,
+                                   albedo_eps);
+    else
+        var = variance_from_image(in, nthreads);
+    smooth_noise(in, var, nthreads);
+}
+
+}  // namespace detail
+}  // namespace zdenoise

@@ -1,0 +1,91 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// The weighted least-squares plane of docs/FILTER.md section 5: the moments
+// of one fit and their solution, with the predicted variance of the
+// plane's value at the centre (the edge test's noise).
+
+#pragma once
+
+#include "internal.h"
+#include "row_kernels.h"
+
+namespace zdenoise {
+namespace detail {
+
+/// Weighted moments of one least-squares plane fit, in window coordinates
+/// u = dx/R, v = dy/R.
+struct FitMoments {
+    double s[6] = {};     ///< sum w {1, u, v, uu, uv, vv}
+    double t[3][3] = {};  ///< per channel: sum w z {1, u, v}
+    double n[6] = {};     ///< sum w^2 Vs {1, u, v, uu, uv, vv}
+    int count = 0;
+
+    /// Set from a cell's lane sums (in pixel offsets) for radius R; also
+    /// returns the cell's sum of w^2 sigma^2. The lanes are added as a
+    /// fixed tree (l + l+4, then + l+2, then + l+1), which vectorises.
+    double set(const CellLanes& c, int R)
+    {
+        using S = CellLanes;
+        static_assert(kLanes == 8, "the tree below adds eight lanes");
+        float half[S::kSums][4], quarter[S::kSums][2];
+        for (int k = 0; k < S::kSums; ++k)
+            for (int l = 0; l < 4; ++l)
+                half[k][l] = c.lane[k][l] + c.lane[k][l + 4];
+        for (int k = 0; k < S::kSums; ++k)
+            for (int l = 0; l < 2; ++l)
+                quarter[k][l] = half[k][l] + half[k][l + 2];
+        double sum[S::kSums];
+        for (int k = 0; k < S::kSums; ++k)
+            sum[k] = double(quarter[k][0] + quarter[k][1]);
+        const double i1 = 1.0 / R, i2 = i1 * i1;
+        const double scale[6] = { 1.0, i1, i1, i2, i2, i2 };
+        for (int k = 0; k < 6; ++k) {
+            s[k] = sum[S::W + k] * scale[k];
+            n[k] = sum[S::N + k] * scale[k];
+        }
+        for (int ch = 0; ch < 3; ++ch)
+            for (int k = 0; k < 3; ++k)
+                t[ch][k] = sum[S::Z0 + 3 * ch + k] * scale[k];
+        count = int(sum[S::Count]);
+        return sum[S::S2];
+    }
+
+    FitMoments& operator+=(const FitMoments& o)
+    {
+        for (int k = 0; k < 6; ++k) {
+            s[k] += o.s[k];
+            n[k] += o.n[k];
+        }
+        for (int ch = 0; ch < 3; ++ch)
+            for (int k = 0; k < 3; ++k)
+                t[ch][k] += o.t[ch][k];
+        count += o.count;
+        return *this;
+    }
+};
+
+/// A solved plane per channel, Z_c = c + a u + b v.
+struct Plane {
+    bool present = false;
+    double c[3] = {}, a[3] = {}, b[3] = {};
+    double var0 = 0.0;  ///< predicted variance of the luminance at p0
+
+    double at(int ch, double u, double v) const
+    {
+        return c[ch] + a[ch] * u + b[ch] * v;
+    }
+    double luminance0() const
+    {
+        return kLumaWeights[0] * c[0] + kLumaWeights[1] * c[1]
+               + kLumaWeights[2] * c[2];
+    }
+};
+
+/// Solve the normal equations of a fit (in double): absent without weight,
+/// a constant with fewer than 3 points or a near-singular matrix.
+Plane
+solve(const FitMoments& m);
+
+}  // namespace detail
+}  // namespace zdenoise

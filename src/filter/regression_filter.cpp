@@ -1,0 +1,297 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// regression_filter(): the adaptive-radius five-plane regression with
+// splatting (docs/FILTER.md sections 2-8), the public entry point. It
+// checks its arguments and filters the output in tiles; each tile runs
+// the stages in src/filter/ in order:
+//   decode_filter_inputs()  pixel classes, guides, noise     (sections 2-4)
+//   fit_centres()           every centre's window fitted and
+//                           splatted, in blocks and phases    (5, 6, 8)
+//   normalise_output()      acc / wsum, pass-through          (7)
+
+#include <zdenoise/zdenoise.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <mutex>
+
+#include <OpenImageIO/imagebufalgo_util.h>
+
+#include "centre_blocks.h"
+#include "filter_inputs.h"
+#include "internal.h"
+#include "window_fitter.h"
+
+namespace zdenoise {
+
+using namespace OIIO;
+using namespace detail;
+
+namespace {
+
+bool
+check_options(ImageBuf& dst, const FilterOptions& o)
+{
+    auto bad = [&](const char* name, double value, const char* need) {
+        dst.errorfmt("regression_filter: option {} = {} is invalid: {}", name,
+                     value, need);
+        return false;
+    };
+    if (o.r_min < 1)
+        return bad("r_min", o.r_min, "needs >= 1");
+    if (o.r_max < o.r_min || o.r_max > 256)
+        return bad("r_max", o.r_max, "needs r_min <= r_max <= 256");
+    auto finite_nonneg = [](float v) { return std::isfinite(v) && v >= 0.0f; };
+    if (!finite_nonneg(o.eta_target))
+        return bad("eta_target", o.eta_target, "needs a finite number >= 0");
+    if (!finite_nonneg(o.edge_k))
+        return bad("edge_k", o.edge_k, "needs a finite number >= 0");
+    if (!finite_nonneg(o.tau_min))
+        return bad("tau_min", o.tau_min, "needs a finite number >= 0");
+    if (!finite_nonneg(o.value_k))
+        return bad("value_k", o.value_k, "needs a finite number >= 0");
+    if (!(o.sigma_good >= 0.0f))
+        return bad("sigma_good", o.sigma_good, "needs a number >= 0");
+    if (!(o.albedo_eps > 0.0f) || !std::isfinite(o.albedo_eps))
+        return bad("albedo_eps", o.albedo_eps, "needs a finite number > 0");
+    if (!finite_nonneg(o.depth_tolerance))
+        return bad("depth_tolerance", o.depth_tolerance,
+                   "needs a finite number >= 0");
+    if (!(o.normal_cut >= -1.0f && o.normal_cut < 1.0f))
+        return bad("normal_cut", o.normal_cut, "needs -1 <= normal_cut < 1");
+    if (!(o.normal_power > 0.0f) || !std::isfinite(o.normal_power))
+        return bad("normal_power", o.normal_power, "needs a finite number > 0");
+    if (!(o.radius_growth >= 1.0f && o.radius_growth <= 4.0f))
+        return bad("radius_growth", o.radius_growth, "needs 1 <= radius_growth <= 4");
+    if (o.centre_stride < 1 || o.centre_stride > 64)
+        return bad("centre_stride", o.centre_stride,
+                   "needs 1 <= centre_stride <= 64");
+    if (o.stride_edges != 0 && o.stride_edges != 1)
+        return bad("stride_edges", o.stride_edges, "needs 0 or 1");
+    if (!finite_nonneg(o.quadrant_power))
+        return bad("quadrant_power", o.quadrant_power,
+                   "needs a finite number >= 0");
+    return true;
+}
+
+
+/// What the centres' splats add up at each output pixel: sum s A_c and
+/// sum s (section 6).
+struct Splats {
+    std::vector<double> acc, wsum;
+    explicit Splats(size_t npix) : acc(3 * npix, 0.0), wsum(npix, 0.0) {}
+};
+
+/// Fit and splat every centre the output pixels `roi` depend on (sections
+/// 5, 6 and 8): the blocks of one phase in parallel, the phases in order,
+/// so that every pixel receives its contributions in one fixed order.
+/// Returns the windows' statistics, summed in block order.
+FilterStats
+fit_centres(const FilterInputs& in, const FilterOptions& opt, const ROI& roi,
+            int nthreads, Splats& splats)
+{
+    const CentreBlocks blocks(opt, opt.frame, roi);
+    const int nblocks = blocks.count();
+    std::vector<FilterStats> block_stats(static_cast<size_t>(nblocks));
+    std::atomic<int64_t> blocks_done { 0 };
+    std::mutex progress_mutex;
+    auto run_block = [&](int b) {
+        WindowFitter fitter(in, opt, roi, splats.acc, splats.wsum);
+        fit_block(blocks, b, in, opt, roi, fitter, block_stats[size_t(b)]);
+        const int64_t done = ++blocks_done;
+        if (opt.progress) {
+            std::lock_guard<std::mutex> lock(progress_mutex);
+            opt.progress(float(done) / float(nblocks));
+        }
+    };
+    for (int phase = 0; phase < 4; ++phase) {
+        std::vector<int> of_phase;
+        for (int b = 0; b < nblocks; ++b)
+            if (blocks.phase(b) == phase)
+                of_phase.push_back(b);
+        parallel_for(int64_t(0), int64_t(of_phase.size()),
+                     [&](int64_t j) { run_block(of_phase[size_t(j)]); },
+                     paropt(nthreads, paropt::SplitDir::Y, 1));
+    }
+    FilterStats total;
+    for (const FilterStats& s : block_stats)
+        total.merge(s);
+    return total;
+}
+
+/// The output pixels `roi` into dst (section 7): RGB from acc / wsum where
+/// a channel receives and something was splatted, else passed through (0
+/// if not finite); other channels copied from the quotient. Counts the
+/// output, passed-through and non-finite pixels into st.
+bool
+normalise_output(ImageBuf& dst, const ImageBuf& quotient,
+                 const FilterInputs& in, const Splats& splats, ROI roi,
+                 int nthreads, FilterStats& st)
+{
+    const size_t npix_out = size_t(roi.width()) * size_t(roi.height());
+    ROI all_ch = roi;
+    all_ch.chbegin = 0;
+    all_ch.chend   = quotient.nchannels();
+    const int nch  = all_ch.nchannels();
+    std::vector<float> out(npix_out * size_t(nch));
+    quotient.get_pixels(all_ch, TypeFloat, out.data());
+    std::atomic<int64_t> passthrough { 0 }, nonfinite { 0 };
+    parallel_for(int64_t(roi.ybegin), int64_t(roi.yend), [&](int64_t y) {
+        int64_t pt = 0, nf = 0;
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const size_t i   = in.index(x, int(y));
+            const size_t o   = size_t(y - roi.ybegin) * size_t(roi.width())
+                             + size_t(x - roi.xbegin);
+            const uint8_t cl = in.cls[i];
+            bool passed      = false;
+            for (int ch = 0; ch < 3; ++ch) {
+                float& v = out[o * nch + ch];
+                if ((cl & (kReceiveR << ch)) && splats.wsum[o] > 0.0) {
+                    v = float(splats.acc[3 * o + ch] / splats.wsum[o]);
+                } else {
+                    passed = true;
+                    if (!std::isfinite(v))
+                        v = 0.0f;
+                }
+            }
+            pt += passed;
+            nf += (cl & kNonFinite) != 0;
+        }
+        passthrough += pt;
+        nonfinite += nf;
+    }, paropt(nthreads));
+    if (!dst.set_pixels(all_ch, TypeFloat, out.data())) {
+        if (!dst.has_error())
+            dst.errorfmt("regression_filter: could not store the result");
+        return false;
+    }
+    st.pixels += int64_t(npix_out);
+    st.passthrough_pixels += passthrough;
+    st.nonfinite_pixels += nonfinite;
+    return true;
+}
+
+/// Filter the output pixels `roi` (sections 2-7), reading the inputs over
+/// roi plus the halo everything depends on. `opt.frame` is the image's data
+/// window.
+bool
+filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
+            const Guides& guides, const FilterOptions& opt, ROI roi,
+            int nthreads, FilterStats& totals)
+{
+    const ROI region = halo_region(roi, opt.frame, filter_halo(opt));
+    FilterInputs in;
+    if (!decode_filter_inputs(in, dst, quotient, albedo, guides, opt, region,
+                              nthreads))
+        return false;
+    Splats splats(size_t(roi.width()) * size_t(roi.height()));
+    FilterStats tile = fit_centres(in, opt, roi, nthreads, splats);
+    if (!normalise_output(dst, quotient, in, splats, roi, nthreads, tile))
+        return false;
+    totals.merge(tile);
+    return true;
+}
+
+}  // namespace
+
+
+int
+filter_halo(const FilterOptions& options)
+{
+    // Everything an output pixel depends on lies within 2*r_max (centres up
+    // to r_max away, their windows r_max further) plus the noise estimate's
+    // footprint (3x3 residual, 5x5 median, 3x3 smoothing) of 4. With a
+    // stride, the lattice points deciding a centre lie up to stride - 1
+    // further.
+    return 2 * std::max(options.r_max, 0) + 4
+           + effective_stride(options) - 1;
+}
+
+
+bool
+regression_filter(ImageBuf& dst, const ImageBuf& quotient,
+                  const ImageBuf& albedo, const Guides& guides,
+                  const FilterOptions& options, FilterStats* stats, ROI roi,
+                  int nthreads)
+{
+    const char* opname = "regression_filter";
+    if (!prepare_dst(dst, quotient, roi, opname)
+        || !check_input(dst, quotient, opname, "quotient", roi, 3)
+        || !check_options(dst, options))
+        return false;
+    // The inputs must hold what the output depends on: with the frame given,
+    // roi and its halo; else their data windows are the frame.
+    FilterOptions tile_opt = options;
+    if (!tile_opt.frame.defined())
+        tile_opt.frame = quotient.roi();
+    if (!check_frame(dst, opname, roi, tile_opt.frame))
+        return false;
+    const ROI need = options.frame.defined()
+                         ? halo_region(roi, options.frame, filter_halo(options))
+                         : quotient.roi();
+    if (!check_input(dst, quotient, opname, "quotient", need, 3)
+        || !check_input(dst, albedo, opname, "albedo", need, 3))
+        return false;
+    struct NamedGuide {
+        const ImageBuf* buf;
+        const char* name;
+        int minchannels;
+    } named[] = { { guides.normal, "normal guide", 3 },
+                  { guides.depth, "depth guide", 1 },
+                  { guides.object_id, "object id guide", 1 },
+                  { guides.variance, "variance guide", 1 },
+                  { guides.half_a, "half buffer A", 3 },
+                  { guides.half_b, "half buffer B", 3 } };
+    for (const NamedGuide& g : named)
+        if (g.buf
+            && !check_input(dst, *g.buf, opname, g.name, need,
+                            g.minchannels))
+            return false;
+    if (!guides.variance && (!guides.half_a != !guides.half_b)) {
+        dst.errorfmt("{}: half buffers need both A and B", opname);
+        return false;
+    }
+
+    // Tiles bound the working memory (about 100 bytes per pixel of a tile
+    // and its halo) whatever the frame size; the result is exactly the
+    // whole-image one (section 8), so the tile size is not a parameter.
+    constexpr int kTile = 1024;
+    const int ntx = (roi.width() + kTile - 1) / kTile;
+    const int nty = (roi.height() + kTile - 1) / kTile;
+    const int ntiles = ntx * nty;
+    FilterStats totals;
+    for (int t = 0; t < ntiles; ++t) {
+        ROI tile(roi.xbegin + (t % ntx) * kTile, 0, roi.ybegin + (t / ntx) * kTile, 0,
+                 roi.zbegin, roi.zend, roi.chbegin, roi.chend);
+        tile.xend = std::min(tile.xbegin + kTile, roi.xend);
+        tile.yend = std::min(tile.ybegin + kTile, roi.yend);
+        if (options.progress)
+            tile_opt.progress = [&](float f) {
+                options.progress((float(t) + f) / float(ntiles));
+            };
+        if (!filter_tile(dst, quotient, albedo, guides, tile_opt, tile,
+                         nthreads, totals))
+            return false;
+    }
+    if (stats)
+        *stats = totals;
+    return true;
+}
+
+
+ImageBuf
+regression_filter(const ImageBuf& quotient, const ImageBuf& albedo,
+                  const Guides& guides, const FilterOptions& options,
+                  FilterStats* stats, ROI roi, int nthreads)
+{
+    ImageBuf result;
+    if (!regression_filter(result, quotient, albedo, guides, options, stats,
+                           roi, nthreads)
+        && !result.has_error())
+        result.errorfmt("regression_filter error");
+    return result;
+}
+
+}  // namespace zdenoise

@@ -1,0 +1,268 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// WindowFitter: window growth, the five-plane fit, the edge and quality
+// stops (docs/FILTER.md section 5), and the combination and splat of the
+// final fit (section 6).
+
+#include "window_fitter.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+namespace zdenoise {
+namespace detail {
+
+void
+WindowFitter::grow_to(int R)
+{
+    if (R <= m_grown)
+        return;
+    const ROI& img = m_in.image;
+    const int ya   = std::max(m_y0 - R, img.ybegin);
+    const int yb   = std::min(m_y0 + R, img.yend - 1);
+    // The square of radius R less the square already grown, a row segment
+    // or two at a time, clipped to the image.
+    auto add = [&](int y, int xa, int xb) {
+        xa = std::max(xa, img.xbegin);
+        xb = std::min(xb, img.xend - 1);
+        if (xb < xa)
+            return;
+        const int dy   = y - m_y0;
+        const size_t i = m_in.index(xa, y);
+        const size_t c = cache_index(xa - m_x0, dy);
+        const int n    = xb - xa + 1;
+        float* g       = &m_g[c];
+        m_guide.row(xa, y, n, g);
+        // Locals: the sums must not go through memory at every point.
+        double zsum = m_zsum;
+        int zcount  = m_zcount;
+        float* fit_weight = &m_fit_weight[c];
+        for (int q = 0; q < n; ++q) {
+            const size_t iq = i + size_t(q);
+            float fw        = 0.0f;
+            if (g[q] > 0.0f && (m_in.cls[iq] & kFitPoint)) {
+                zsum += m_in.zl[iq];
+                ++zcount;
+                fw = g[q] * m_in.fit_prior[iq];
+            }
+            fit_weight[q] = fw;
+        }
+        m_zsum   = zsum;
+        m_zcount = zcount;
+    };
+    for (int y = ya; y <= yb; ++y) {
+        if (std::abs(y - m_y0) > m_grown) {
+            add(y, m_x0 - R, m_x0 + R);
+        } else {
+            add(y, m_x0 - R, m_x0 - m_grown - 1);
+            add(y, m_x0 + m_grown + 1, m_x0 + R);
+        }
+    }
+    m_grown = R;
+}
+
+
+WindowFit
+WindowFitter::fit(int R, int value_buffer)
+{
+    WindowFit wf;
+    wf.radius = R;
+    wf.values = value_buffer;
+    float* values = m_value[value_buffer].data();
+    wf.mean   = float(m_zsum / m_zcount);
+    set_spatial(R);
+    const ROI& img = m_in.image;
+    const int ya   = std::max(m_y0 - R, img.ybegin);
+    const int yb   = std::min(m_y0 + R, img.yend - 1);
+    const int xa   = std::max(m_x0 - R, img.xbegin);
+    const int xb   = std::min(m_x0 + R, img.xend - 1);
+
+    // Nine disjoint cells, each point added once: open quadrants 0-3,
+    // half-axes 4 (+y), 5 (-x), 6 (-y), 7 (+x), and the centre 8. The closed
+    // quadrants and the whole window are sums of cells.
+    CellLanes* cells = m_cells.data();
+    std::memset(static_cast<void*>(cells), 0, 9 * sizeof(CellLanes));
+    FitRow row;
+    row.mean        = wf.mean;
+    row.value_scale = value_scale(wf.mean);
+    for (int y = ya; y <= yb; ++y) {
+        const int dy = y - m_y0;
+        row.dy       = float(dy);
+        row.ey       = m_spatial_row[size_t(dy + R)];
+        const int segments[3][3] = {
+            { xa, m_x0 - 1, dy > 0 ? 1 : (dy < 0 ? 2 : 5) },
+            { m_x0, m_x0, dy > 0 ? 4 : (dy < 0 ? 6 : 8) },
+            { m_x0 + 1, xb, dy > 0 ? 0 : (dy < 0 ? 3 : 7) },
+        };
+        for (const auto& seg : segments) {
+            if (seg[1] < seg[0])
+                continue;
+            const size_t i = m_in.index(seg[0], y);
+            const size_t c = cache_index(seg[0] - m_x0, dy);
+            row.n          = seg[1] - seg[0] + 1;
+            row.dx0        = float(seg[0] - m_x0);
+            fit_row(&m_fit_weight[c], &m_spatial_row[size_t(seg[0] - m_x0 + R)],
+                    &m_in.zl[i], &m_in.zfit[0][i], &m_in.zfit[1][i],
+                    &m_in.zfit[2][i], &m_in.vs[i], &m_in.sigma[i], values + c,
+                    &cells[seg[2]], row);
+        }
+    }
+    FitMoments cell[9];
+    double w2s2 = 0.0;
+    for (int k = 0; k < 9; ++k)
+        w2s2 += cell[k].set(cells[k], R);
+    static const int kQuadrantCells[4][4] = {
+        { 0, 4, 7, 8 }, { 1, 4, 5, 8 }, { 2, 5, 6, 8 }, { 3, 6, 7, 8 }
+    };
+    FitMoments whole;
+    for (const FitMoments& m : cell)
+        whole += m;
+    wf.whole = solve(whole);
+    for (int q = 0; q < 4; ++q) {
+        FitMoments quad;
+        for (int k : kQuadrantCells[q])
+            quad += cell[k];
+        wf.quadrant[q] = solve(quad);
+    }
+    wf.eta = wf.whole.present ? std::sqrt(w2s2) / whole.s[0]
+                              : std::numeric_limits<double>::infinity();
+    return wf;
+}
+
+
+bool
+WindowFitter::edge_fires(const WindowFit& w) const
+{
+    if (!w.whole.present)
+        return false;
+    const double zl  = w.whole.luminance0();
+    const double azl = std::max(std::fabs(zl), kEps);
+    for (const Plane& q : w.quadrant) {
+        if (!q.present)
+            continue;
+        const double eta_m = std::sqrt(std::max(q.var0, 0.0)) / azl;
+        const double tau   = std::max(double(m_opt.edge_k) * eta_m,
+                                      double(m_opt.tau_min));
+        if (std::fabs(zl - q.luminance0()) / azl > tau)
+            return true;
+    }
+    return false;
+}
+
+
+void
+WindowFitter::splat(const WindowFit& w)
+{
+    const int R = w.radius;
+    set_spatial(R);
+    auto coeffs = [](const Plane& p) {
+        PlaneCoeffs k;
+        for (int ch = 0; ch < 3; ++ch) {
+            k.c[ch] = float(p.c[ch]);
+            k.a[ch] = float(p.a[ch]);
+            k.b[ch] = float(p.b[ch]);
+        }
+        return k;
+    };
+    const PlaneCoeffs whole = coeffs(w.whole);
+    PlaneCoeffs quadrant[4];
+    for (int q = 0; q < 4; ++q)
+        quadrant[q] = w.quadrant[q].present ? coeffs(w.quadrant[q]) : whole;
+    SplatRow row;
+    row.values      = m_value[w.values].data();
+    row.inv_r       = 1.0f / float(R);
+    row.mean        = w.mean;
+    row.value_scale = value_scale(w.mean);
+    row.whole       = whole;
+    row.s           = m_splat_s.data();
+    for (int ch = 0; ch < 3; ++ch)
+        row.a[ch] = m_splat_a[ch].data();
+    const float* values = row.values;
+    // Only output pixels receive.
+    const int ya = std::max(m_y0 - R, m_out.ybegin);
+    const int yb = std::min(m_y0 + R, m_out.yend - 1);
+    const int xa = std::max(m_x0 - R, m_out.xbegin);
+    const int xb = std::min(m_x0 + R, m_out.xend - 1);
+    const size_t out_w = size_t(m_out.width());
+    for (int y = ya; y <= yb; ++y) {
+        const int dy = y - m_y0;
+        row.v        = float(dy) * row.inv_r;
+        row.ey       = m_spatial_row[size_t(dy + R)];
+        // The row's two halves, each in one quadrant (dx < 0, dx >= 0).
+        const int halves[2][3] = { { xa, std::min(xb, m_x0 - 1), dy >= 0 ? 1 : 2 },
+                                   { std::max(xa, m_x0), xb, dy >= 0 ? 0 : 3 } };
+        for (const auto& half : halves) {
+            const int x0 = half[0], x1 = half[1];
+            if (x1 < x0)
+                continue;
+            const size_t i = m_in.index(x0, y);
+            const size_t c = cache_index(x0 - m_x0, dy);
+            row.cls          = &m_in.cls[i];
+            row.g            = &m_g[c];
+            row.spatial      = &m_spatial_row[size_t(x0 - m_x0 + R)];
+            row.fit_weight   = &m_fit_weight[c];
+            row.values       = values + c;
+            row.zl           = &m_in.zl[i];
+            row.n            = x1 - x0 + 1;
+            row.dx0          = float(x0 - m_x0);
+            row.quadrant     = quadrant[half[2]];
+            splat_row(row, m_opt.quadrant_power);
+            size_t o = size_t(y - m_out.ybegin) * out_w
+                       + size_t(x0 - m_out.xbegin);
+            for (int q = 0; q < row.n; ++q, ++o) {
+                const float sw = m_splat_s[size_t(q)];
+                if (!(sw > 0.0f))
+                    continue;
+                double* acc = &m_acc[3 * o];
+                for (int ch = 0; ch < 3; ++ch)
+                    acc[ch] += double(m_splat_a[ch][size_t(q)]);
+                m_wsum[o] += double(sw);
+            }
+        }
+    }
+}
+
+
+StopReason
+WindowFitter::process(int x0, int y0, int& radius, bool splat_window)
+{
+    m_x0    = x0;
+    m_y0    = y0;
+    m_grown = -1;
+    m_zsum  = 0.0;
+    m_zcount = 0;
+    m_guide.centre(x0, y0);
+
+    WindowFit previous, current;
+    StopReason reason = StopReason::Size;
+    int fits = 0;
+    for (int R = m_opt.r_min;; R = next_radius(R)) {
+        grow_to(R);
+        current = fit(R, fits++ & 1);
+        if (edge_fires(current)) {
+            reason = StopReason::Edge;
+            if (R > m_opt.r_min)
+                current = previous;
+            break;
+        }
+        if (current.eta <= m_opt.eta_target) {
+            reason = StopReason::Quality;
+            break;
+        }
+        if (R >= m_opt.r_max) {
+            reason = StopReason::Size;
+            break;
+        }
+        previous = current;
+    }
+    radius = current.radius;
+    if (current.whole.present && splat_window)
+        splat(current);
+    return reason;
+}
+
+}  // namespace detail
+}  // namespace zdenoise

@@ -1,0 +1,130 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// WindowFitter: one centre's window grown radius by radius, its five
+// planes fitted, the stop tests, and the splat of the final fit
+// (docs/FILTER.md sections 5 and 6).
+
+#pragma once
+
+#include <vector>
+
+#include "filter_inputs.h"
+#include "guide_weight.h"
+#include "plane_fit.h"
+#include "row_kernels.h"
+
+namespace zdenoise {
+namespace detail {
+
+/// The five planes of one window and what the splat needs of it.
+struct WindowFit {
+    int radius  = 0;
+    int values  = 0;     ///< which WindowFitter::m_value holds its exp(-vt)
+    float mean  = 0.0f;  ///< <z>: mean luminance of the window's points
+    double eta  = 0.0;   ///< predicted relative noise at the centre
+    Plane whole;
+    Plane quadrant[4];
+};
+
+enum class StopReason { Quality, Size, Edge };
+
+/// Grows, fits and splats the windows of the centres of a range of rows.
+/// One per block of centres: holds the per-centre scratch (guide weights of the
+/// window) so that nothing is allocated per pixel.
+class WindowFitter {
+public:
+    WindowFitter(const FilterInputs& in, const FilterOptions& opt,
+                 const ROI& out, std::vector<double>& acc,
+                 std::vector<double>& wsum)
+        : m_in(in)
+        , m_opt(opt)
+        , m_out(out)
+        , m_acc(acc)
+        , m_wsum(wsum)
+        , m_guide(in, opt)
+        , m_side(2 * opt.r_max + 1)
+        , m_g(cache_size(), 0.0f)
+        , m_fit_weight(cache_size(), 0.0f)
+        , m_value { std::vector<float>(cache_size(), 0.0f),
+                    std::vector<float>(cache_size(), 0.0f) }
+        , m_spatial_row(size_t(m_side) + kLanes, 0.0f)
+        , m_cells(9)
+        , m_splat_s(size_t(m_side) + kLanes, 0.0f)
+        , m_splat_a { std::vector<float>(size_t(m_side) + kLanes, 0.0f),
+                      std::vector<float>(size_t(m_side) + kLanes, 0.0f),
+                      std::vector<float>(size_t(m_side) + kLanes, 0.0f) }
+    {
+    }
+
+    /// Fit the window of fit point (x0, y0) and splat it (unless
+    /// splat_window is false: a strided lattice point of the next block,
+    /// fitted only for its stop reason).
+    StopReason process(int x0, int y0, int& radius, bool splat_window = true);
+
+    /// The radius tried after R: R + 1, or R * radius_growth (at least
+    /// R + 1), never beyond r_max.
+    int next_radius(int R) const
+    {
+        const int grown = int(float(R) * m_opt.radius_growth);
+        return std::min(std::max(R + 1, grown), m_opt.r_max);
+    }
+
+private:
+    /// The caches hold the largest window and kLanes of padding (the row
+    /// kernels read whole blocks of lanes).
+    size_t cache_size() const { return size_t(m_side) * m_side + kLanes; }
+    size_t cache_index(int dx, int dy) const
+    {
+        return size_t(dy + m_opt.r_max) * m_side + (dx + m_opt.r_max);
+    }
+    float& g_at(int dx, int dy) { return m_g[cache_index(dx, dy)]; }
+    /// Fill m_spatial_row for radius R: exp(-d^2/R^2) at index d + R.
+    void set_spatial(int R)
+    {
+        for (int d = 0; d <= R; ++d)
+            m_spatial_row[size_t(R + d)] = m_spatial_row[size_t(R - d)]
+                = std::exp(-float(d * d) / float(R * R));
+    }
+    /// The value term's exponent is value_scale(<z>) |zl - <z>| (clamped
+    /// in exp_neg so that weights never underflow).
+    float value_scale(float mean) const
+    {
+        return m_opt.value_k / std::max(std::fabs(mean), float(kEps));
+    }
+    // noinline: the three stages stay separate in profiles
+    // (docs/PERFORMANCE.md); a call per window or radius costs nothing.
+    /// Extend the cached guide weights and point sums to radius R.
+    [[gnu::noinline]] void grow_to(int R);
+    /// Fit at radius R, keeping the value factors in m_value[values].
+    [[gnu::noinline]] WindowFit fit(int R, int values);
+    bool edge_fires(const WindowFit& w) const;
+    [[gnu::noinline]] void splat(const WindowFit& w);
+
+    const FilterInputs& m_in;
+    const FilterOptions& m_opt;
+    const ROI& m_out;
+    std::vector<double>& m_acc;
+    std::vector<double>& m_wsum;
+    GuideWeight m_guide;
+    int m_side;
+    std::vector<float> m_g;  ///< g(q; p0) over the grown window
+    /// g(q; p0) exp(-sigma(q)) for good fit points, 0 for the others: the
+    /// part of the fit weight that does not change with R.
+    std::vector<float> m_fit_weight;
+    /// exp(-vt(q)) of the good points at the last two radii fitted (the
+    /// splat of the final fit reuses them; an edge steps back one fit).
+    std::vector<float> m_value[2];
+    /// exp(-d^2/R^2) at d + R, d = -R..R (and kLanes of padding)
+    std::vector<float> m_spatial_row;
+    /// The lane sums of the nine cells of a fit.
+    std::vector<CellLanes> m_cells;
+    /// The splat kernel's output for one row segment (and kLanes padding).
+    std::vector<float> m_splat_s, m_splat_a[3];
+    int m_x0 = 0, m_y0 = 0, m_grown = -1;
+    double m_zsum = 0.0;  ///< sum of zl over fit points with g > 0
+    int m_zcount  = 0;
+};
+
+}  // namespace detail
+}  // namespace zdenoise
