@@ -2,7 +2,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
 // layered_denoise(): every layer denoised on its own, summed with the
-// unfiltered residual (ALGORITHM.md section 7).
+// unfiltered residual (docs/FILTER.md section 11).
 
 #include <zdenoise/zdenoise.h>
 

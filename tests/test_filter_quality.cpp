@@ -138,7 +138,7 @@ TEST(FilterQuality, ShadowEdgeKeepsContrast)
 
 // At high noise (8 spp, 35% per pixel) the edge stop fires late: edge_k
 // times the predicted noise of a quadrant plane extrapolated to its corner
-// is large. With ALGORITHM.md's edge_k 3 the edge was blurred over ~10 px
+// is large. With the method's edge_k 3 the edge was blurred over ~10 px
 // (column means 17% / 26% off at 3 px); the tuned edge_k 1.5 keeps columns
 // 3+ px from it within ~8.5%.
 TEST(FilterQuality, ShadowEdgeKeepsContrastAtHighNoise)

@@ -44,8 +44,9 @@ using OIIO::ROI;
 
 /// Every parameter of the regression filter (docs/FILTER.md section 9).
 /// The defaults are tuned on the public benchmark; where they differ from
-/// ALGORITHM.md section 8 (edge_k, value_k, sigma_good) the benchmark showed
-/// them better on every scene. `algorithm_defaults()` gives section 8's.
+/// the method's own (edge_k, value_k, sigma_good, radius_growth,
+/// centre_stride) the benchmark showed them better on every scene.
+/// `algorithm_defaults()` gives the method's.
 struct FilterOptions {
     /// Smallest window half-size: the window starts at (2*r_min+1)^2 pixels.
     int r_min = 2;
@@ -93,7 +94,7 @@ struct FilterOptions {
     int stride_edges = 1;
     /// The radius tried after R: max(R + 1, floor(R * radius_growth)), up
     /// to r_max; an edge steps back to the radius tried before. 1 is
-    /// ALGORITHM.md's R + 1; the default 2 (radii 2, 4, 8, 16) is about
+    /// the method's R + 1; the default 2 (radii 2, 4, 8, 16) is about
     /// twice as fast and better on the whole public benchmark
     /// (docs/FILTER.md section 9).
     float radius_growth = 2.0f;
@@ -115,7 +116,7 @@ struct FilterOptions {
     /// never changes the result.
     ROI frame;
 
-    /// The defaults of ALGORITHM.md section 8 (edge_k 3, value_k 2,
+    /// The method's own defaults (docs/FILTER.md section 9: edge_k 3, value_k 2,
     /// sigma_good 1, radius_growth 1, every fit point a centre), before
     /// tuning on data.
     static FilterOptions algorithm_defaults()
@@ -254,7 +255,7 @@ ZDENOISE_API ImageBuf denoise(const ImageBuf& radiance, const ImageBuf& albedo,
                               FilterStats* stats = nullptr, ROI roi = {},
                               int nthreads = 0);
 
-/// One layer of a layered render (ALGORITHM.md section 7): the radiance of
+/// One layer of a layered render (docs/FILTER.md section 11): the radiance of
 /// one specular history or BSDF lobe with its own albedo (colour) pass.
 struct Layer {
     /// What the layer is called (in messages, and for the caller's output).
@@ -294,7 +295,7 @@ struct Layer {
 /// The factor on FilterOptions::edge_k for a Layer that is `reflected`.
 constexpr float kReflectedEdgeScale = 0.5f;
 
-/// Layered denoising (ALGORITHM.md section 7): every layer is denoised on
+/// Layered denoising (docs/FILTER.md section 11): every layer is denoised on
 /// its own (demodulate, regression_filter, remodulate; or, for a divided
 /// layer, regression_filter and a product with its albedo), and the result
 /// is the sum of the denoised layers plus the residual, unfiltered. A
