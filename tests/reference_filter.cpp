@@ -331,6 +331,7 @@ private:
         int R = 0;
         double m = 0.0;  // mean zl over P_R
         Fit whole, quad[4];
+        double lo[3] = { INF, INF, INF }, hi[3] = { -INF, -INF, -INF };  // z over G_R
         double eta  = INF;
         bool edge   = false;
     };
@@ -351,29 +352,35 @@ Filter::compute_noise()
     const float eps = opt.albedo_eps;
     std::vector<double> V(size_t(w) * h, 0.0);
 
-    if (g.variance || (g.half_a && g.half_b)) {
+    // The robust 5x5 estimate: median of the defined e over the 5x5 / the
+    // median of chi-square(1); V = 0 where none is defined.
+    auto robust = [&](const std::vector<double>& e,
+                      const std::vector<char>& e_def) {
+        std::vector<double> R(size_t(w) * h, 0.0);
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) {
                 if (!fitpt(x, y))
                     continue;
-                double sum = 0.0;
-                for (int c = 0; c < 3; ++c) {
-                    double varL;
-                    if (g.variance) {
-                        int vc = g.variance->nch >= 3 ? c : 0;
-                        varL   = g.variance->at(x, y, vc);
-                    } else {
-                        double d = double(g.half_a->at(x, y, c))
-                                   - double(g.half_b->at(x, y, c));
-                        varL = d * d / 4.0;
+                std::vector<double> vals;
+                for (int dy = -2; dy <= 2; ++dy)
+                    for (int dx = -2; dx <= 2; ++dx) {
+                        int xn = x + dx, yn = y + dy;
+                        if (z.inside(xn, yn) && e_def[idx(xn, yn)])
+                            vals.push_back(e[idx(xn, yn)]);
                     }
-                    double den = double(La.at(x, y, c)) + double(eps);
-                    sum += LW[c] * varL / (den * den);
-                }
-                V[idx(x, y)] = sum;
+                if (vals.empty())
+                    continue;  // V = 0
+                std::sort(vals.begin(), vals.end());
+                size_t n = vals.size();
+                // median; for an even count the mean of the two middle values
+                double med = (n % 2) ? vals[n / 2]
+                                     : 0.5 * (vals[n / 2 - 1] + vals[n / 2]);
+                R[idx(x, y)] = med / CHI2_MEDIAN;
             }
-    } else {
-        // estimated from z: e(p) from the 8 same-surface neighbours
+        return R;
+    };
+    // Estimated from z: e(p) from the 8 same-surface neighbours.
+    auto from_image = [&]() {
         std::vector<double> e(size_t(w) * h, 0.0);
         std::vector<char> e_def(size_t(w) * h, 0);
         for (int y = 0; y < h; ++y)
@@ -398,26 +405,42 @@ Filter::compute_noise()
                 e[idx(x, y)]     = r * r * n / (n + 1.0);
                 e_def[idx(x, y)] = 1;
             }
+        return robust(e, e_def);
+    };
+
+    if (g.variance || (g.half_a && g.half_b)) {
+        std::vector<char> defined(size_t(w) * h, 0);
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) {
                 if (!fitpt(x, y))
                     continue;
-                std::vector<double> vals;
-                for (int dy = -2; dy <= 2; ++dy)
-                    for (int dx = -2; dx <= 2; ++dx) {
-                        int xn = x + dx, yn = y + dy;
-                        if (z.inside(xn, yn) && e_def[idx(xn, yn)])
-                            vals.push_back(e[idx(xn, yn)]);
+                double sum = 0.0;
+                for (int c = 0; c < 3; ++c) {
+                    double varL;
+                    if (g.variance) {
+                        int vc = g.variance->nch >= 3 ? c : 0;
+                        varL   = g.variance->at(x, y, vc);
+                    } else {
+                        double d = double(g.half_a->at(x, y, c))
+                                   - double(g.half_b->at(x, y, c));
+                        varL = d * d / 4.0;
                     }
-                if (vals.empty())
-                    continue;  // V = 0
-                std::sort(vals.begin(), vals.end());
-                size_t n = vals.size();
-                // median; for an even count the mean of the two middle values
-                double med = (n % 2) ? vals[n / 2]
-                                     : 0.5 * (vals[n / 2 - 1] + vals[n / 2]);
-                V[idx(x, y)] = med / CHI2_MEDIAN;
+                    double den = double(La.at(x, y, c)) + double(eps);
+                    sum += LW[c] * varL / (den * den);
+                }
+                V[idx(x, y)]       = sum;
+                defined[idx(x, y)] = std::isfinite(sum) && sum >= 0.0;
             }
+        if (!g.variance) {
+            // Halves: the robust estimate of the pairs' squared differences,
+            // and never below the image's own (which also sees structure).
+            V = robust(V, defined);
+            const std::vector<double> own = from_image();
+            for (size_t i = 0; i < V.size(); ++i)
+                V[i] = std::max(V[i], own[i]);
+        }
+    } else {
+        V = from_image();
     }
     V_ = V;
 
@@ -561,6 +584,10 @@ Filter::window(int x0, int y0, int R) const
             p.z[c] = z.at(x, y, c);
         p.vs    = Vs(x, y);
         p.sigma = sigma(x, y);
+        for (int c = 0; c < 3; ++c) {
+            W.lo[c] = std::min(W.lo[c], p.z[c]);
+            W.hi[c] = std::max(W.hi[c], p.z[c]);
+        }
         good.push_back(p);
     }
 
@@ -719,6 +746,8 @@ Filter::run(RefStats* stats)
                         }
                         A = (Z + wm * Zm) / (1.0 + wm);
                     }
+                    // within the range of z over the window's good points
+                    A = std::min(std::max(A, fin.lo[c]), fin.hi[c]);
                     acc[idx(xq, yq) * 3 + c] += s * A;
                 }
                 wsum[idx(xq, yq)] += s;

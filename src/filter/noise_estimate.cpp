@@ -83,6 +83,46 @@ same_surface(const FilterInputs& in, size_t a, size_t b)
     return true;
 }
 
+/// The robust local variance of section 3: at each fit point, the median
+/// of the squared residuals `e` (each an unbiased one-sample estimate of V,
+/// NaN where undefined) over its 5x5, divided by the median of chi-square
+/// with one degree of freedom; 0 where no e is defined. Edges and isolated
+/// fireflies do not inflate it.
+RawVariance
+robust_variance(const FilterInputs& in, const RawVariance& e, int nthreads)
+{
+    RawVariance var(in.region.npixels(), kUndefined);
+    auto fit = [&](size_t i) { return fit_point(in, i); };
+    for_rows(in.region, nthreads, [&](int y) {
+        float window[25];
+        for (int x = in.region.xbegin; x < in.region.xend; ++x) {
+            const size_t i = in.index(x, y);
+            if (!fit(i))
+                continue;
+            int n = 0;
+            for (int dy = -2; dy <= 2; ++dy)
+                for (int dx = -2; dx <= 2; ++dx)
+                    if (in.in_region(x + dx, y + dy)) {
+                        const float eq = e[in.index(x + dx, y + dy)];
+                        if (!std::isnan(eq))
+                            window[n++] = eq;
+                    }
+            if (n == 0) {
+                var[i] = 0.0f;
+                continue;
+            }
+            // Median; for an even count, the mean of the middle two.
+            std::sort(window, window + n);
+            const float med = (n & 1) ? window[n / 2]
+                                      : 0.5f
+                                            * (window[n / 2 - 1]
+                                               + window[n / 2]);
+            var[i] = med / kChi2Median;
+        }
+    });
+    return var;
+}
+
 }  // namespace
 
 
@@ -105,10 +145,10 @@ variance_from_guide(const FilterInputs& in, const ImageBuf& variance,
 RawVariance
 variance_from_halves(const FilterInputs& in, const ImageBuf& half_a,
                      const ImageBuf& half_b, const std::vector<float>& albedo,
-                     float albedo_eps)
+                     float albedo_eps, int nthreads)
 {
     const size_t npix = in.region.npixels();
-    RawVariance var(npix, kUndefined);
+    RawVariance e(npix, kUndefined);
     std::vector<float> a = read_channels(half_a, in.region, 0, 3);
     std::vector<float> b = read_channels(half_b, in.region, 0, 3);
     for (size_t i = 0; i < npix; ++i) {
@@ -119,9 +159,12 @@ variance_from_halves(const FilterInputs& in, const ImageBuf& half_a,
             const float d = a[3 * i + c] - b[3 * i + c];
             vl[c]         = 0.25f * d * d;
         }
-        var[i] = quotient_variance(albedo, albedo_eps, i, vl, 3);
+        e[i] = quotient_variance(albedo, albedo_eps, i, vl, 3);
     }
-    return var;
+    // One pair of samples a pixel is a variance estimate with one degree of
+    // freedom: too noisy to stop windows on. The same robust 5x5 estimate
+    // as the image's own (docs/FILTER.md section 3).
+    return robust_variance(in, e, nthreads);
 }
 
 
@@ -129,7 +172,6 @@ RawVariance
 variance_from_image(const FilterInputs& in, int nthreads)
 {
     const size_t npix = in.region.npixels();
-    RawVariance var(npix, kUndefined);
     auto fit = [&](size_t i) { return fit_point(in, i); };
     const float nan = kUndefined;
     // Estimated from z: squared residuals against the 8-neighbour mean
@@ -158,34 +200,7 @@ variance_from_image(const FilterInputs& in, int nthreads)
             }
         }
     });
-    for_rows(in.region, nthreads, [&](int y) {
-        float window[25];
-        for (int x = in.region.xbegin; x < in.region.xend; ++x) {
-            const size_t i = in.index(x, y);
-            if (!fit(i))
-                continue;
-            int n = 0;
-            for (int dy = -2; dy <= 2; ++dy)
-                for (int dx = -2; dx <= 2; ++dx)
-                    if (in.in_region(x + dx, y + dy)) {
-                        const float e = resid[in.index(x + dx, y + dy)];
-                        if (!std::isnan(e))
-                            window[n++] = e;
-                    }
-            if (n == 0) {
-                var[i] = 0.0f;
-                continue;
-            }
-            // Median; for an even count, the mean of the middle two.
-            std::sort(window, window + n);
-            const float med = (n & 1) ? window[n / 2]
-                                      : 0.5f
-                                            * (window[n / 2 - 1]
-                                               + window[n / 2]);
-            var[i] = med / kChi2Median;
-        }
-    });
-    return var;
+    return robust_variance(in, resid, nthreads);
 }
 
 
@@ -234,9 +249,14 @@ estimate_noise(FilterInputs& in, const Guides& guides,
     RawVariance var;
     if (guides.variance)
         var = variance_from_guide(in, *guides.variance, albedo, albedo_eps);
-    else if (guides.half_a && guides.half_b)
+    else if (guides.half_a && guides.half_b) {
         var = variance_from_halves(in, *guides.half_a, *guides.half_b, albedo,
-                                   albedo_eps);
+                                   albedo_eps, nthreads);
+        const RawVariance own = variance_from_image(in, nthreads);
+        for (size_t i = 0; i < var.size(); ++i)
+            if (own[i] > var[i] || std::isnan(var[i]))
+                var[i] = own[i];
+    }
     else
         var = variance_from_image(in, nthreads);
     smooth_noise(in, var, nthreads);

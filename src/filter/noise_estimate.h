@@ -25,11 +25,12 @@ RawVariance
 variance_from_guide(const FilterInputs& in, const ImageBuf& variance,
                     const std::vector<float>& albedo, float albedo_eps);
 
-/// Section 3, source 2: (A - B)^2 / 4 of two half buffers, as source 1.
+/// Section 3, source 2: (A - B)^2 / 4 of two half buffers, divided by the
+/// squared albedo as source 1, then the robust 5x5 estimate of source 3.
 RawVariance
 variance_from_halves(const FilterInputs& in, const ImageBuf& half_a,
                      const ImageBuf& half_b, const std::vector<float>& albedo,
-                     float albedo_eps);
+                     float albedo_eps, int nthreads);
 
 /// Section 3, source 3: estimated from z itself, the 5x5 median of the
 /// squared residuals against the 8-neighbour mean on the same surface.

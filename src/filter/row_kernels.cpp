@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 namespace zdenoise {
 namespace detail {
@@ -51,7 +52,7 @@ fit_row(const float* __restrict fit_weight, const float* __restrict spatial,
         const float* __restrict z1, const float* __restrict z2,
         const float* __restrict vs, const float* __restrict sigma,
         float* __restrict values, CellLanes* __restrict cell,
-        const FitRow& in)
+        RangeLanes* __restrict range, const FitRow& in)
 {
     using S = CellLanes;
     const float dy = in.dy, ey = in.ey, mean = in.mean;
@@ -87,6 +88,10 @@ fit_row(const float* __restrict fit_weight, const float* __restrict spatial,
                 c.lane[S::Z0 + 3 * ch][l] += w * zc[ch];
                 c.lane[S::Z0x + 3 * ch][l] += wx * zc[ch];
                 c.lane[S::Z0y + 3 * ch][l] += wy * zc[ch];
+                float& lo = range->lo[ch][l];
+                float& hi = range->hi[ch][l];
+                lo = use && zc[ch] < lo ? zc[ch] : lo;
+                hi = use && zc[ch] > hi ? zc[ch] : hi;
             }
             const float nx = w2v * dx, ny = w2v * dy;
             c.lane[S::N][l] += w2v;
@@ -125,6 +130,8 @@ splat_lanes(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
 {
     float* const out_a[3] = { a0, a1, a2 };
     const PlaneCoeffs P = in.whole, Q = in.quadrant;
+    const float lo[3] = { in.lo[0], in.lo[1], in.lo[2] };
+    const float hi[3] = { in.hi[0], in.hi[1], in.hi[2] };
     const float ey = in.ey, inv_r = in.inv_r, v = in.v, dx0 = in.dx0;
     const float mean = in.mean, value_scale = in.value_scale;
     const int n = in.n;
@@ -169,7 +176,8 @@ splat_lanes(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
                 wm = opposite ? float(kMaxWm) : wm;
                 // Without a quadrant plane Q is the whole one: Zm = Z, wm = 1
                 // and A = (Z + Z) / 2 = Z exactly.
-                out_a[ch][q] = s * ((Z + wm * Zm) / (1.0f + wm));
+                const float A = (Z + wm * Zm) / (1.0f + wm);
+                out_a[ch][q]  = s * std::min(std::max(A, lo[ch]), hi[ch]);
             }
             out_s[q] = s;
         }
@@ -191,6 +199,27 @@ splat_row(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
 }
 
 }  // namespace
+
+void
+RangeLanes::clear()
+{
+    for (int ch = 0; ch < 3; ++ch)
+        for (int l = 0; l < kLanes; ++l) {
+            lo[ch][l] = std::numeric_limits<float>::infinity();
+            hi[ch][l] = -std::numeric_limits<float>::infinity();
+        }
+}
+
+
+void
+RangeLanes::reduce(float lo_out[3], float hi_out[3]) const
+{
+    for (int ch = 0; ch < 3; ++ch) {
+        lo_out[ch] = *std::min_element(lo[ch], lo[ch] + kLanes);
+        hi_out[ch] = *std::max_element(hi[ch], hi[ch] + kLanes);
+    }
+}
+
 
 /// The splat of one row segment, by the kernel that fits quadrant_power.
 void

@@ -38,6 +38,16 @@ struct CellLanes {
     float lane[kSums][kLanes];
 };
 
+/// The range of z of a window's fit points (those of weight > 0), per channel,
+/// in kLanes partial minima and maxima: no fit of the window predicts light
+/// outside it (section 6).
+struct RangeLanes {
+    float lo[3][kLanes], hi[3][kLanes];
+    void clear();
+    /// The whole range: lo, hi per channel (lo > hi when no point).
+    void reduce(float lo_out[3], float hi_out[3]) const;
+};
+
 /// One row segment of a window for the fit: pointers at its first point.
 struct FitRow {
     int n;              ///< points in the segment
@@ -58,7 +68,7 @@ fit_row(const float* __restrict fit_weight, const float* __restrict spatial,
         const float* __restrict z1, const float* __restrict z2,
         const float* __restrict vs, const float* __restrict sigma,
         float* __restrict values, CellLanes* __restrict cell,
-        const FitRow& in);
+        RangeLanes* __restrict range, const FitRow& in);
 
 /// A solved plane's coefficients as floats, for the splat kernel.
 struct PlaneCoeffs {
@@ -78,6 +88,7 @@ struct SplatRow {
     float dx0, ey, inv_r, v;  ///< dx of the first point, e(dy), 1/R, dy/R
     float mean, value_scale;  ///< for exp(-vt) where the fit did not keep it
     PlaneCoeffs whole, quadrant;  ///< quadrant = whole where it has none
+    float lo[3], hi[3];  ///< the window's range of z: A is clamped to it
     float* s;     ///< receives each point's weight (0: receives nothing)
     float* a[3];  ///< receives weight times the blended plane value A
 };

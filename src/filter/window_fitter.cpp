@@ -85,6 +85,8 @@ WindowFitter::fit(int R, int value_buffer)
     // quadrants and the whole window are sums of cells.
     CellLanes* cells = m_cells.data();
     std::memset(static_cast<void*>(cells), 0, 9 * sizeof(CellLanes));
+    RangeLanes range;
+    range.clear();
     FitRow row;
     row.mean        = wf.mean;
     row.value_scale = value_scale(wf.mean);
@@ -107,9 +109,10 @@ WindowFitter::fit(int R, int value_buffer)
             fit_row(&m_fit_weight[c], &m_spatial_row[size_t(seg[0] - m_x0 + R)],
                     &m_in.zl[i], &m_in.zfit[0][i], &m_in.zfit[1][i],
                     &m_in.zfit[2][i], &m_in.vs[i], &m_in.sigma[i], values + c,
-                    &cells[seg[2]], row);
+                    &cells[seg[2]], &range, row);
         }
     }
+    range.reduce(wf.lo, wf.hi);
     FitMoments cell[9];
     double w2s2 = 0.0;
     for (int k = 0; k < 9; ++k)
@@ -177,6 +180,10 @@ WindowFitter::splat(const WindowFit& w)
     row.mean        = w.mean;
     row.value_scale = value_scale(w.mean);
     row.whole       = whole;
+    for (int ch = 0; ch < 3; ++ch) {
+        row.lo[ch] = w.lo[ch];
+        row.hi[ch] = w.hi[ch];
+    }
     row.s           = m_splat_s.data();
     for (int ch = 0; ch < 3; ++ch)
         row.a[ch] = m_splat_a[ch].data();
