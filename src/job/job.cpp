@@ -22,6 +22,7 @@
 #include "atomic_write.h"
 #include "channel_spec.h"
 #include "layer_conventions.h"
+#include "options.h"
 #include "row_reader.h"
 
 namespace zdenoise {
@@ -1031,6 +1032,9 @@ struct Output {
 void
 run(Job j, OutputSink& sink, JobResult& result)
 {
+    const std::string invalid = validate(j, Spelling::CommandLine);
+    if (!invalid.empty())
+        fail(invalid);
     InputFiles files;
     Timer read_timer;
     const InputHeader& in = files.header(j.in.path);
@@ -1048,10 +1052,6 @@ run(Job j, OutputSink& sink, JobResult& result)
         fail(format("no albedo: '{}' has no Denoising Albedo pass; give "
                     "--albedo FILE",
                     j.in.path));
-    if (j.tile_rows < 0)
-        fail(format("--tile needs a number of rows >= 1 (or 0: automatic), "
-                    "got {}",
-                    j.tile_rows));
     const ROI noisy = in.window();
 
     // Every channel the job reads, chosen from the headers: a missing
@@ -1391,71 +1391,6 @@ one_line(std::string s)
         if (c == '\n' || c == '\r')
             c = ' ';
     return s;
-}
-
-
-bool
-parse_mode(const std::string& text, Mode& mode)
-{
-    if (text == "beauty")
-        mode = Mode::Beauty;
-    else if (text == "layers")
-        mode = Mode::Layers;
-    else
-        return false;
-    return true;
-}
-
-
-const char*
-mode_name(Mode mode)
-{
-    return mode == Mode::Beauty ? "beauty" : mode == Mode::Layers ? "layers" : "";
-}
-
-
-bool
-parse_data_type(const std::string& text, TypeDesc& type)
-{
-    if (text != "half" && text != "float")
-        return false;
-    type = TypeDesc(text);
-    return true;
-}
-
-
-bool
-parse_layer(const std::string& text, LayerArg& layer)
-{
-    const size_t eq = text.find('=');
-    if (eq == std::string::npos || eq == 0)
-        return false;
-    const std::vector<std::string> parts = Strutil::splits(text.substr(eq + 1),
-                                                           ":");
-    if (parts.size() < 2 || parts.size() > 4 || parts[0].empty()
-        || parts[1].empty())
-        return false;
-    layer.name      = text.substr(0, eq);
-    layer.radiance  = parts[0];
-    layer.albedo    = parts[1];
-    layer.divided   = false;
-    layer.reflected = false;
-    for (size_t k = 2; k < parts.size(); ++k) {
-        bool& flag = parts[k] == "divided" ? layer.divided : layer.reflected;
-        if ((parts[k] != "divided" && parts[k] != "reflected") || flag)
-            return false;  // unknown or repeated
-        flag = true;
-    }
-    return true;
-}
-
-
-std::string
-layer_text(const LayerArg& layer)
-{
-    return layer.name + "=" + layer.radiance + ":" + layer.albedo
-           + (layer.divided ? ":divided" : "")
-           + (layer.reflected ? ":reflected" : "");
 }
 
 
