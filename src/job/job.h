@@ -119,6 +119,14 @@ public:
     virtual bool end(std::string& error) { return true; }
 };
 
+/// The spec of the output as a file holds it (and the OIIO plugin serves
+/// it): `spec` in scanlines, each channel in its output pixel type
+/// (`formats`), `format` the widest of them (TypeDesc::basetype_merge), the
+/// per-channel formats listed only when they differ.
+OIIO::ImageSpec
+native_spec(const OIIO::ImageSpec& spec,
+            const std::vector<OIIO::TypeDesc>& formats);
+
 /// Run `job`, giving the output to `sink`. On failure returns false and a
 /// one-line `error` naming the file, channel or option at fault (a sink's
 /// error as the sink gave it). Never throws.
