@@ -304,23 +304,32 @@ options()
 }
 
 
+namespace {
+
+/// The option whose `name` (its flag or its key) is `text`, or null.
+const Option*
+find(const char* Option::*name, const std::string& text)
+{
+    for (const Option& o : options())
+        if (o.*name && text == o.*name)
+            return &o;
+    return nullptr;
+}
+
+}  // namespace
+
+
 const Option*
 find_flag(const std::string& flag)
 {
-    for (const Option& o : options())
-        if (o.flag && flag == o.flag)
-            return &o;
-    return nullptr;
+    return find(&Option::flag, flag);
 }
 
 
 const Option*
 find_key(const std::string& key)
 {
-    for (const Option& o : options())
-        if (o.key && key == o.key)
-            return &o;
-    return nullptr;
+    return find(&Option::key, key);
 }
 
 

@@ -281,19 +281,19 @@ parse_option(const Option& option, const json& value,
         break;
     }
     case Kind::Mode:
-        if (!parse_mode(parse_string(key, value, false),
-                        std::get<Field<Mode>>(option.field)(command)))
-            fail(format("\"mode\" must be \"beauty\" or \"layers\", not "
-                        "{}",
+    case Kind::DataType: {
+        const std::string text = parse_string(key, value, false);
+        const bool mode        = option.kind == Kind::Mode;
+        if (!(mode ? parse_mode(text,
+                                std::get<Field<Mode>>(option.field)(command))
+                   : parse_data_type(
+                       text, std::get<Field<TypeDesc>>(option.field)(command))))
+            fail(format("\"{}\" must be {}, not {}", key,
+                        mode ? "\"beauty\" or \"layers\""
+                             : "\"half\" or \"float\"",
                         shown(value)));
         break;
-    case Kind::DataType:
-        if (!parse_data_type(parse_string(key, value, false),
-                             std::get<Field<TypeDesc>>(option.field)(command)))
-            fail(format("\"data-type\" must be \"half\" or \"float\", not "
-                        "{}",
-                        shown(value)));
-        break;
+    }
     case Kind::Whole:
         std::get<Field<int>>(option.field)(command)
             = parse_whole_number(key, value);
