@@ -45,9 +45,8 @@ struct ReadingRecipe {
 
 
 /// The job's output as the file zdenoise would write for it, read back:
-/// scanlines, each channel in the pixel type it is written in. As OIIO's
-/// readers do, `format` is the widest channel type, and per-channel types
-/// are listed only when they differ.
+/// scanlines, each channel in the pixel type it is written in, with the
+/// file's `format` and per-channel types (job::native_spec()).
 class NativeImage final : public job::OutputSink {
 public:
     ImageSpec spec;
@@ -57,15 +56,7 @@ public:
                const std::vector<TypeDesc>& formats,
                std::string& error) override
     {
-        spec        = image_spec;
-        spec.format = *std::max_element(
-            formats.begin(), formats.end(),
-            [](TypeDesc a, TypeDesc b) { return a.size() < b.size(); });
-        spec.channelformats = formats;
-        if (std::all_of(formats.begin(), formats.end(),
-                        [&](TypeDesc t) { return t == spec.format; }))
-            spec.channelformats.clear();
-        spec.tile_width = spec.tile_height = spec.tile_depth = 0;
+        spec = job::native_spec(image_spec, formats);
         pixels.resize(spec.image_bytes(true));
         return true;
     }

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -28,144 +29,17 @@
 
 #include "../job/atomic_write.h"
 #include "../job/job.h"
-#include "../job/option_names.h"
+#include "../job/options.h"
 #include "../job/recipe.h"
 #include "sequence.h"
 
 using namespace OIIO;
 using OIIO::Strutil::fmt::format;
 using namespace zdenoise;
+using zdenoise::cli::kExitError;
+using zdenoise::cli::kExitUsage;
 
 namespace {
-
-constexpr int kExitError = 1;
-constexpr int kExitUsage = 2;
-
-const char* kUsage = R"(zdenoise )" ZDENOISE_VERSION_STRING R"( -- denoise Monte Carlo renders (Zhdanov, Ershov & Voloboy 2018)
-
-Usage: zdenoise --in NOISY -o OUTPUT [options]
-       zdenoise --in NOISY --write-recipe RECIPE.zdn [options]
-
-Inputs (each FILE may take a channel selection, oiiotool style:
---albedo:ch=R,G,B FILE, or a layer name: --albedo:ch="Denoising Albedo" FILE):
-  --in FILE            Noisy render (radiance R,G,B and optional A).
-  --albedo FILE        Noise-free albedo (R,G,B). Required unless --in is a
-                       Blender Cycles multilayer EXR.
-  --normal FILE        Normal guide (X,Y,Z).
-  --depth FILE         Depth guide (Z).
-  --id FILE            Object id guide (one channel, or id,coverage pairs).
-  --variance FILE      Per-pixel variance of the radiance (1 or 3 channels).
-  --halves A B         Two independent half renders (radiance = (A+B)/2).
-  --no-normal, --no-depth, --no-id
-                       Do not use the guide picked by default.
-  A Blender Cycles multilayer EXR (channels <layer>.Combined.R ...) needs no
-  other input: Combined, Denoising Albedo, Denoising Normal, Denoising Depth
-  and CryptoObject (else IndexOB) are taken from it. So are Arnold-style
-  AOVs (X with X_albedo, N, Z, crypto_object) and specular depth layers
-  (spec0..spec5 with spec0_albedo.., residual); see docs/LAYERS.md.
-
-Layers (docs/LAYERS.md):
-  --mode MODE          'layers': denoise each layer (lobe or specular depth)
-                       with its own albedo, add the residual;
-                       'beauty': denoise the beauty with the albedo. Default:
-                       layers when --layer is given, else beauty (layers are
-                       better where lobe passes exist; docs/LAYERS.md).
-  --layer NAME=RADIANCE:ALBEDO[:divided][:reflected]
-                       A layer of the --in file (repeatable; replaces the
-                       detected layers). RADIANCE and ALBEDO are channel
-                       selections as for :ch= (a layer name or a list of
-                       channels); RADIANCE may sum sets with '+'
-                       (DiffDir+DiffInd). 'divided': the radiance is already
-                       divided by the albedo (Cycles' Dir/Ind passes).
-                       'reflected': light through a glossy or specular bounce
-                       (reflection, refraction): a stricter edge test.
-  --residual CHANNELS  What is added unfiltered (e.g. Emit+Env). Default: the
-                       beauty minus the layers.
-  --aovs               Also write each denoised layer as NAME.R,G,B.
-
-Output:
-  -o FILE              Output image: the --in file with its radiance channels
-                       denoised; every other channel and the metadata kept,
-                       each channel in its input pixel type. Written to a
-                       temporary file, then renamed.
-  -d TYPE              Output pixel type, 'half' or 'float' (default: each
-                       channel's input type). Cryptomatte channels stay float.
-  --force              Allow the output to replace one of the inputs.
-  --write-recipe FILE  Instead of denoising, write a recipe (.zdn) for these
-                       options: any OpenImageIO program with the zdenoise
-                       plugin reads it as the denoised image
-                       (share/zdn-format.md).
-
-Colour (OpenColorIO; docs/COLOUR.md):
-  --colorconfig FILE   OCIO config (default: $OCIO, else the bundled
-                       share/zdenoise/ocio/config.ocio).
-  --iscolorspace NAME  Colour space of the noisy input (default: an EXR's
-                       chromaticities, else the config's scene_linear; a
-                       PNG/JPEG's tag, sRGB). -v says what was assumed.
-  --albedo-colorspace NAME
-                       Colour space of the albedo (default: as --in when
-                       from the same file, else guessed the same way).
-  --ocolorspace NAME   Colour space of the output (default: the input's).
-  --working-colorspace NAME
-                       Space the filter works in (default: scene_linear).
-                       Demodulation is per channel: use the renderer's
-                       rendering space.
-
-Filter parameters (docs/FILTER.md):
-  --preset NAME        Start from a parameter set: 'tuned' (default, tuned on
-                       the public benchmark) or 'spec' (ALGORITHM.md section
-                       8: edge-k 3, value-k 2, sigma-good 1); the options
-                       below override it wherever they stand.
-  --rmin N             Smallest window half-size (default 2)
-  --rmax N             Largest window half-size (default 16)
-  --eta X              Target relative noise at the window centre (0.02)
-  --edge-k X           Strong-variation stop: multiple of the noise (1.5)
-  --tau-min X          Strong-variation stop: smallest level (0.05)
-  --value-k X          Strength of the value weight (1)
-  --sigma-good X       Noisiest point taking part in fits (3)
-  --albedo-eps X       Smallest albedo demodulated (0.001)
-  --depth-tol X        Relative depth departure ending a surface (0.02)
-  --normal-cut X       Normal weight is 0 at or below this dot product (0.5)
-  --normal-power X     Normal weight exponent (4)
-  --quadrant-power X   Quadrant weight exponent (8)
-  --radius-growth X    Radius tried after R: max(R+1, R*X) (2: radii 2, 4, 8,
-                       16; 1 = ALGORITHM.md's R+1, as --preset spec)
-  --stride N           Fit windows at every N-th pixel, and at every pixel
-                       near an edge (3; 1 = the exact filter, 1.5x as slow,
-                       within 2% of the same relMSE; docs/PERFORMANCE.md)
-  --stride-edges 0|1   0: the lattice only, also at edges (preview: 2x
-                       faster again, up to 27% worse relMSE) (1)
-
-Frame sequences (oiiotool's conventions) and batches:
-  --frames LIST        Frames to denoise: 1001-1100, 1-99x2 (every 2nd),
-                       1,5,10-20; any FILE (and -o) may then name a frame
-                       pattern: shot.#.exr (4 digits), shot.@@@.exr (one
-                       digit per @), shot.%04d.exr.
-  --skip-existing      Leave frames whose output exists (re-runs).
-  --fail-fast          Stop at the first failed frame (default: report it,
-                       denoise the others, exit 1 at the end).
-  --report FILE.json   Per-frame wall time, parameters, filter statistics.
-  --print-chunks N     Print the frame list in chunks of N frames, one
-                       --frames list per line, and exit (farm dispatch:
-                       share/zdenoise/farm/zdenoise-sbatch).
-
-General:
-  --mem-limit SIZE     Refuse a frame needing more memory than SIZE (bytes,
-                       or with a K, M, G or T suffix), before reading its
-                       pixels. Default: half the machine's memory.
-  --tile N             Read, denoise and write the frame in strips of N
-                       rows (each read with the filter's halo of
-                       2*rmax+4 rows around it): memory follows N, not the
-                       frame. Default: automatic, the whole frame when it is
-                       small, else strips that fit the memory. Results do
-                       not depend on it.
-  --threads N          Threads (default: all cores); results do not depend
-                       on it.
-  -v                   Verbose: inputs, parameters, progress, timings,
-                       statistics.
-  --help               This text.
-  --version            Print the version.
-)";
 
 /// Thrown inside main's helpers only, caught in main: a one-line message
 /// and an exit code.
@@ -179,16 +53,6 @@ fail(const std::string& message, int code = kExitError)
 {
     throw Failure { message, code };
 }
-
-struct Args {
-    job::Job job;
-    std::string preset = "tuned";
-    std::string output;
-    std::string recipe;  ///< --write-recipe
-    bool force   = false;
-    bool verbose = false;
-    cli::SequenceOptions batch;  ///< frame sequences, reports (sequence.h)
-};
 
 double
 parse_number(const std::string& opt, const std::string& value)
@@ -231,10 +95,77 @@ parse_size(const std::string& opt, const std::string& value)
     return uint64_t(v);
 }
 
-Args
+/// Set `option` of `c` from its command-line value, read by `value`.
+void
+parse_value(const job::Option& option, const std::string& opt,
+            const std::string& channels,
+            const std::function<std::string()>& value, job::Command& c)
+{
+    using job::Field;
+    using job::Kind;
+    switch (option.kind) {
+    case Kind::Input:
+        std::get<Field<job::InputArg>>(option.field)(c) = { value(), channels,
+                                                            true };
+        break;
+    case Kind::Halves:
+        c.job.half_a = { value(), channels, true };
+        c.job.half_b = { value(), channels, true };
+        break;
+    case Kind::Flag: std::get<Field<bool>>(option.field)(c) = true; break;
+    case Kind::Text:
+    case Kind::Name:
+    case Kind::Path:
+        std::get<Field<std::string>>(option.field)(c) = value();
+        break;
+    case Kind::Preset: value(); break;  // applied first
+    case Kind::Real:
+        std::get<Field<float>>(option.field)(c) = float(
+            parse_number(opt, value()));
+        break;
+    case Kind::Whole:
+        std::get<Field<int>>(option.field)(c) = parse_int(opt, value());
+        break;
+    case Kind::Size:
+        std::get<Field<uint64_t>>(option.field)(c) = parse_size(opt, value());
+        break;
+    case Kind::Mode: {
+        const std::string mode = value();
+        if (!job::parse_mode(mode, c.job.mode))
+            fail(format("--mode: unknown mode '{}' (known: layers, beauty)",
+                        mode),
+                 kExitUsage);
+        break;
+    }
+    case Kind::Layers: {
+        const std::string text = value();
+        c.job.layers.emplace_back();
+        if (!job::parse_layer(text, c.job.layers.back()))
+            fail(format("--layer needs NAME=RADIANCE:ALBEDO[:divided][:reflected], "
+                        "got '{}'",
+                        text),
+                 kExitUsage);
+        break;
+    }
+    case Kind::DataType: {
+        const std::string type = value();
+        if (!job::parse_data_type(type, c.job.data_type))
+            fail(format("-d: unknown type '{}' (known: half, float)", type),
+                 kExitUsage);
+        break;
+    }
+    case Kind::Help: fputs(job::usage_text().c_str(), stdout); std::exit(0);
+    case Kind::Version:
+        printf("zdenoise %s\n", ZDENOISE_VERSION_STRING);
+        std::exit(0);
+    }
+}
+
+
+job::Command
 parse_args(int argc, char* argv[])
 {
-    Args a;
+    job::Command a;
     std::vector<std::string> av(argv + 1, argv + argc);
     // The preset is the base the other filter options modify, wherever it
     // stands on the command line.
@@ -246,33 +177,8 @@ parse_args(int argc, char* argv[])
                             a.preset, job::preset_names()),
                      kExitUsage);
         }
-    size_t i   = 0;
-    auto value = [&](const std::string& opt) -> std::string {
-        if (i + 1 >= av.size())
-            fail(format("{} needs a value", opt), kExitUsage);
-        return av[++i];
-    };
-    std::map<std::string, job::InputArg*> inputs
-        = { { "--in", &a.job.in },       { "--albedo", &a.job.albedo },
-            { "--normal", &a.job.normal }, { "--depth", &a.job.depth },
-            { "--id", &a.job.id },       { "--variance", &a.job.variance } };
-    std::map<std::string, std::string*> colour_options
-        = { { "--colorconfig", &a.job.colour.config },
-            { "--iscolorspace", &a.job.colour.input_space },
-            { "--albedo-colorspace", &a.job.colour.albedo_space },
-            { "--ocolorspace", &a.job.colour.output_space },
-            { "--working-colorspace", &a.job.colour.working_space } };
-    std::map<std::string, float*> floats;
-    std::map<std::string, int*> ints = { { "--threads", &a.job.threads },
-                                         { "--tile", &a.job.tile_rows } };
-    for (const job::FilterOptionName& o : job::filter_option_names()) {
-        if (o.real)
-            floats[std::string("--") + o.name] = &(a.job.filter.*o.real);
-        else
-            ints[std::string("--") + o.name] = &(a.job.filter.*o.whole);
-    }
-    for (; i < av.size(); ++i) {
-        std::string arg = av[i];
+    for (size_t i = 0; i < av.size(); ++i) {
+        const std::string arg = av[i];
         // oiiotool-style modifiers: --albedo:ch=R,G,B
         std::string opt = arg, modifiers;
         size_t colon    = arg.find(':');
@@ -280,112 +186,47 @@ parse_args(int argc, char* argv[])
             opt       = arg.substr(0, colon);
             modifiers = arg.substr(colon + 1);
         }
-        if (opt == "--help" || opt == "-h") {
-            fputs(kUsage, stdout);
-            std::exit(0);
-        } else if (opt == "--version") {
-            printf("zdenoise %s\n", ZDENOISE_VERSION_STRING);
-            std::exit(0);
-        } else if (inputs.count(opt) || opt == "--halves") {
-            std::string channels;
-            if (!modifiers.empty()) {
-                if (!Strutil::starts_with(modifiers, "ch="))
-                    fail(format("{}: unknown modifier '{}' (only :ch= is "
-                                "known)",
-                                opt, modifiers),
-                         kExitUsage);
-                channels = modifiers.substr(3);
-            }
-            if (opt == "--halves") {
-                a.job.half_a = { value(opt), channels, true };
-                a.job.half_b = { value(opt), channels, true };
-            } else {
-                *inputs[opt] = { value(opt), channels, true };
-            }
-        } else if (!modifiers.empty()) {
+        const job::Option* option = job::find_flag(opt);
+        const bool input          = option
+                           && (option->kind == job::Kind::Input
+                               || option->kind == job::Kind::Halves);
+        std::string channels;
+        if (input && !modifiers.empty()) {
+            if (!Strutil::starts_with(modifiers, "ch="))
+                fail(format("{}: unknown modifier '{}' (only :ch= is known)",
+                            opt, modifiers),
+                     kExitUsage);
+            channels = modifiers.substr(3);
+        }
+        const bool action = option
+                            && (option->kind == job::Kind::Help
+                                || option->kind == job::Kind::Version);
+        if (!input && !action && !modifiers.empty())
             fail(format("option {} takes no modifiers", opt), kExitUsage);
-        } else if (opt == "-o") {
-            a.output = value(opt);
-        } else if (opt == "--write-recipe") {
-            a.recipe = value(opt);
-        } else if (opt == "--mem-limit") {
-            a.job.mem_limit = parse_size(opt, value(opt));
-        } else if (opt == "--preset") {
-            value(opt);  // applied above
-        } else if (opt == "--frames") {
-            a.batch.frames = value(opt);
-        } else if (opt == "--report") {
-            a.batch.report = value(opt);
-        } else if (opt == "--fail-fast") {
-            a.batch.fail_fast = true;
-        } else if (opt == "--skip-existing") {
-            a.batch.skip_existing = true;
-        } else if (opt == "--print-chunks") {
-            a.batch.print_chunks = parse_int(opt, value(opt));
-            if (a.batch.print_chunks < 1)
-                fail("--print-chunks needs a chunk size >= 1", kExitUsage);
-        } else if (colour_options.count(opt)) {
-            *colour_options[opt] = value(opt);
-        } else if (floats.count(opt)) {
-            *floats[opt] = float(parse_number(opt, value(opt)));
-        } else if (ints.count(opt)) {
-            *ints[opt] = parse_int(opt, value(opt));
-        } else if (opt == "--mode") {
-            const std::string mode = value(opt);
-            if (!job::parse_mode(mode, a.job.mode))
-                fail(format("--mode: unknown mode '{}' (known: layers, "
-                            "beauty)",
-                            mode),
-                     kExitUsage);
-        } else if (opt == "--layer") {
-            const std::string text = value(opt);
-            a.job.layers.emplace_back();
-            if (!job::parse_layer(text, a.job.layers.back()))
-                fail(format("--layer needs NAME=RADIANCE:ALBEDO[:divided][:reflected], "
-                            "got '{}'",
-                            text),
-                     kExitUsage);
-        } else if (opt == "--residual") {
-            a.job.residual = value(opt);
-        } else if (opt == "--aovs") {
-            a.job.write_layers = true;
-        } else if (opt == "-d") {
-            const std::string type = value(opt);
-            if (!job::parse_data_type(type, a.job.data_type))
-                fail(format("-d: unknown type '{}' (known: half, float)",
-                            type),
-                     kExitUsage);
-        } else if (opt == "--no-normal") {
-            a.job.no_normal = true;
-        } else if (opt == "--no-depth") {
-            a.job.no_depth = true;
-        } else if (opt == "--no-id") {
-            a.job.no_id = true;
-        } else if (opt == "--force") {
-            a.force = true;
-        } else if (opt == "-v") {
-            a.verbose = true;
-        } else {
+        if (!option)
             fail(format("unknown option '{}' (see zdenoise --help)", arg),
                  kExitUsage);
-        }
+        parse_value(*option, opt, channels, [&]() -> std::string {
+            if (i + 1 >= av.size())
+                fail(format("{} needs a value", opt), kExitUsage);
+            return av[++i];
+        }, a);
+        if (opt == "--print-chunks" && a.print_chunks < 1)
+            fail("--print-chunks needs a chunk size >= 1", kExitUsage);
     }
-    if (!a.job.in.given)
-        fail("no input: give --in FILE (see zdenoise --help)", kExitUsage);
-    if (a.output.empty() && a.recipe.empty() && !a.batch.print_chunks)
+    // What to do is checked once there is an input (so that a bare
+    // `zdenoise` says what to give first), then the job.
+    if (a.job.in.given && a.output.empty() && a.recipe.empty()
+        && !a.print_chunks)
         fail("no output: give -o FILE (see zdenoise --help)", kExitUsage);
-    if (!a.output.empty() && !a.recipe.empty())
+    if (a.job.in.given && !a.output.empty() && !a.recipe.empty())
         fail("give either -o FILE (denoise) or --write-recipe FILE (write a "
              "recipe to denoise later), not both",
              kExitUsage);
-    if (a.job.threads < 0)
-        fail(format("--threads needs a number >= 0, got {}", a.job.threads),
-             kExitUsage);
-    if (a.job.tile_rows < 0)
-        fail(format("--tile needs a number of rows >= 1 (or 0: automatic), "
-                    "got {}",
-                    a.job.tile_rows),
-             kExitUsage);
+    const std::string invalid = job::validate(a.job,
+                                              job::Spelling::CommandLine);
+    if (!invalid.empty())
+        fail(invalid, kExitUsage);
     return a;
 }
 
@@ -417,10 +258,18 @@ remove_temporary_files_on_interrupt()
 int
 run(int argc, char* argv[])
 {
-    Args a = parse_args(argc, argv);
+    job::Command a = parse_args(argc, argv);
     remove_temporary_files_on_interrupt();
     std::string err;
-    if (!a.recipe.empty() && cli::is_batch(a.job, a.recipe, a.batch))
+    cli::SequenceOptions batch;
+    batch.frames        = a.frames;
+    batch.report        = a.report;
+    batch.fail_fast     = a.fail_fast;
+    batch.skip_existing = a.skip_existing;
+    batch.print_chunks  = a.print_chunks;
+    batch.verbose       = a.verbose;
+    batch.force         = a.force;
+    if (!a.recipe.empty() && cli::is_batch(a.job, a.recipe, batch))
         fail("--write-recipe writes the recipe of one image: no frame "
              "patterns, --frames or batch options",
              kExitUsage);
@@ -433,10 +282,8 @@ run(int argc, char* argv[])
     }
     if (a.job.threads > 0)
         OIIO::attribute("threads", a.job.threads);
-    a.batch.verbose = a.verbose;
-    a.batch.force   = a.force;
-    if (cli::is_batch(a.job, a.output, a.batch)) {
-        const int status = cli::run_batch(a.job, a.output, a.batch, err);
+    if (cli::is_batch(a.job, a.output, batch)) {
+        const int status = cli::run_batch(a.job, a.output, batch, err);
         if (status != 0)
             fail(err, status);
         return 0;
@@ -444,12 +291,10 @@ run(int argc, char* argv[])
     Timer total;
 
     // Never overwrite an input unless asked.
-    if (!a.force)
-        for (const std::string& in : job::input_paths(a.job))
-            if (cli::same_file(in, a.output))
-                fail(format("the output '{}' is also an input; use --force "
-                            "to replace it",
-                            a.output));
+    const std::string refused = cli::output_is_input(a.job, a.output,
+                                                     a.force);
+    if (!refused.empty())
+        fail(refused);
 
     int last_tenth = -1;
     if (a.verbose) {

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <climits>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -29,9 +28,6 @@ using namespace OIIO;
 using OIIO::Strutil::fmt::format;
 
 namespace {
-
-constexpr int kExitError = 1;
-constexpr int kExitUsage = 2;
 
 /// What became of one frame, for the summary and the report.
 struct FrameRecord {
@@ -119,12 +115,9 @@ run_frame(const job::Job& job, FrameRecord& r, const SequenceOptions& o)
         r.error   = why;
         r.seconds = wall();
     };
-    if (!o.force)
-        for (const std::string& in : job::input_paths(job))
-            if (same_file(in, r.output))
-                return failed(format("the output '{}' is also an input; use "
-                                     "--force to replace it",
-                                     r.output));
+    const std::string refused = output_is_input(job, r.output, o.force);
+    if (!refused.empty())
+        return failed(refused);
     job::JobResult result;
     std::string err;
     const bool ok = job::run_job_to_file(job, r.output, result, err);
@@ -209,16 +202,6 @@ write_report(const std::string& path, const job::Job& job,
 }
 
 }  // namespace
-
-
-bool
-same_file(const std::string& a, const std::string& b)
-{
-    char ra[PATH_MAX], rb[PATH_MAX];
-    if (!realpath(a.c_str(), ra) || !realpath(b.c_str(), rb))
-        return false;
-    return std::strcmp(ra, rb) == 0;
-}
 
 
 bool

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "../job/job.h"
+#include "shared.h"
 
 namespace zdenoise {
 namespace cli {
@@ -35,10 +36,6 @@ is_batch(const job::Job& job, const std::string& output,
 int
 run_batch(const job::Job& job, const std::string& output,
           const SequenceOptions& options, std::string& error);
-
-/// Whether two paths name the same existing file.
-bool
-same_file(const std::string& a, const std::string& b);
 
 }  // namespace cli
 }  // namespace zdenoise

@@ -3,6 +3,8 @@
 
 #include "channel_spec.h"
 
+#include <algorithm>
+
 #include <OpenImageIO/strutil.h>
 
 namespace zdenoise {
@@ -12,23 +14,50 @@ using OIIO::Strutil::fmt::format;
 
 namespace {
 
-/// Component names tried for a role, in order of preference; each entry is
-/// one complete naming (e.g. R,G,B or X,Y,Z).
-std::vector<std::vector<std::string>>
-role_components(Role role)
+/// What each role takes, in one row: its name in messages, the component
+/// names tried (in order of preference; each entry one complete naming,
+/// e.g. R,G,B or X,Y,Z), and how many channels an explicit list may give.
+struct RoleFacts {
+    Role role;
+    const char* name;
+    std::vector<std::vector<std::string>> components;
+    std::vector<size_t> counts;  ///< the channel counts allowed
+    bool pairs;                  ///< also any even number (id, coverage)
+    const char* counts_text;     ///< the counts, for messages
+};
+
+const std::vector<RoleFacts>&
+role_table()
 {
-    switch (role) {
-    case Role::Radiance:
-    case Role::Albedo:
-    case Role::LayerRadiance: return { { "R", "G", "B" }, { "r", "g", "b" } };
-    case Role::Normal:
-        return { { "X", "Y", "Z" }, { "x", "y", "z" }, { "R", "G", "B" } };
-    case Role::Depth: return { { "Z" }, { "z" }, { "V" }, { "R" }, { "Y" } };
-    case Role::ObjectId: return { { "X" }, { "x" }, { "R" }, { "V" }, { "Y" } };
-    case Role::Variance:
-        return { { "R", "G", "B" }, { "r", "g", "b" }, { "V" }, { "Y" } };
-    }
-    return {};
+    static const std::vector<RoleFacts> table = {
+        { Role::Radiance, "radiance", { { "R", "G", "B" }, { "r", "g", "b" } },
+          { 3, 4 }, false, "3 (R,G,B) or 4 (R,G,B,A)" },
+        { Role::Albedo, "albedo", { { "R", "G", "B" }, { "r", "g", "b" } },
+          { 3 }, false, "3" },
+        { Role::Normal, "normal",
+          { { "X", "Y", "Z" }, { "x", "y", "z" }, { "R", "G", "B" } }, { 3 },
+          false, "3" },
+        { Role::Depth, "depth", { { "Z" }, { "z" }, { "V" }, { "R" }, { "Y" } },
+          { 1 }, false, "1" },
+        { Role::ObjectId, "object id",
+          { { "X" }, { "x" }, { "R" }, { "V" }, { "Y" } }, { 1 }, true,
+          "1, or (id, coverage) pairs" },
+        { Role::Variance, "variance",
+          { { "R", "G", "B" }, { "r", "g", "b" }, { "V" }, { "Y" } }, { 1, 3 },
+          false, "1 or 3" },
+        { Role::LayerRadiance, "layer radiance",
+          { { "R", "G", "B" }, { "r", "g", "b" } }, { 3 }, false, "3" },
+    };
+    return table;
+}
+
+const RoleFacts&
+facts(Role role)
+{
+    for (const RoleFacts& f : role_table())
+        if (f.role == role)
+            return f;
+    return role_table().front();  // not reached: every role has a row
 }
 
 /// The index of the channel called `want`, or the unique channel ending in
@@ -52,31 +81,9 @@ find_channel(const std::vector<std::string>& names, const std::string& want)
 bool
 count_fits(Role role, size_t n)
 {
-    switch (role) {
-    case Role::Radiance: return n == 3 || n == 4;
-    case Role::Albedo:
-    case Role::LayerRadiance:
-    case Role::Normal: return n == 3;
-    case Role::Depth: return n == 1;
-    case Role::Variance: return n == 1 || n == 3;
-    case Role::ObjectId: return n == 1 || (n >= 2 && n % 2 == 0);
-    }
-    return false;
-}
-
-const char*
-count_wanted(Role role)
-{
-    switch (role) {
-    case Role::Radiance: return "3 (R,G,B) or 4 (R,G,B,A)";
-    case Role::Albedo:
-    case Role::LayerRadiance:
-    case Role::Normal: return "3";
-    case Role::Depth: return "1";
-    case Role::Variance: return "1 or 3";
-    case Role::ObjectId: return "1, or (id, coverage) pairs";
-    }
-    return "";
+    const RoleFacts& f = facts(role);
+    return std::find(f.counts.begin(), f.counts.end(), n) != f.counts.end()
+           || (f.pairs && n >= 2 && n % 2 == 0);
 }
 
 /// Try one naming of the role's components, with an optional layer prefix.
@@ -100,16 +107,7 @@ try_components(const std::vector<std::string>& names, const std::string& layer,
 const char*
 role_name(Role role)
 {
-    switch (role) {
-    case Role::Radiance: return "radiance";
-    case Role::Albedo: return "albedo";
-    case Role::Normal: return "normal";
-    case Role::Depth: return "depth";
-    case Role::ObjectId: return "object id";
-    case Role::Variance: return "variance";
-    case Role::LayerRadiance: return "layer radiance";
-    }
-    return "?";
+    return facts(role).name;
 }
 
 
@@ -138,7 +136,7 @@ select_channels(const std::vector<std::string>& names, const std::string& select
         }
         if (!count_fits(role, indices.size())) {
             error = format("{} channels given for the {}; it needs {}",
-                           indices.size(), role_name(role), count_wanted(role));
+                           indices.size(), role_name(role), facts(role).counts_text);
             return false;
         }
         return true;
@@ -147,7 +145,7 @@ select_channels(const std::vector<std::string>& names, const std::string& select
     // A layer name, or the role's plain names when empty. A single channel
     // name is accepted for one-channel roles.
     const std::string layer = parts.empty() ? std::string() : parts[0];
-    for (const auto& comps : role_components(role)) {
+    for (const auto& comps : facts(role).components) {
         if (try_components(names, layer, comps, indices)) {
             if (role == Role::Radiance) {
                 int a = find_channel(names, layer.empty() ? "A" : layer + ".A");
@@ -166,7 +164,7 @@ select_channels(const std::vector<std::string>& names, const std::string& select
         }
     }
     std::string wanted;
-    const auto namings = role_components(role);
+    const auto namings = facts(role).components;
     for (const std::string& c : namings.front())
         wanted += (wanted.empty() ? "" : ",")
                   + (layer.empty() ? c : layer + "." + c);

@@ -119,20 +119,13 @@ public:
     virtual bool end(std::string& error) { return true; }
 };
 
-/// The spellings of the command line and recipes: "beauty", "layers" (Auto
-/// has none); "half", "float" for the output type;
-/// "NAME=RADIANCE:ALBEDO[:divided][:reflected]" for a layer. Each parse returns false
-/// for anything else.
-bool
-parse_mode(const std::string& text, Mode& mode);
-const char*
-mode_name(Mode mode);
-bool
-parse_data_type(const std::string& text, OIIO::TypeDesc& type);
-bool
-parse_layer(const std::string& text, LayerArg& layer);
-std::string
-layer_text(const LayerArg& layer);
+/// The spec of the output as a file holds it (and the OIIO plugin serves
+/// it): `spec` in scanlines, each channel in its output pixel type
+/// (`formats`), `format` the widest of them (TypeDesc::basetype_merge), the
+/// per-channel formats listed only when they differ.
+OIIO::ImageSpec
+native_spec(const OIIO::ImageSpec& spec,
+            const std::vector<OIIO::TypeDesc>& formats);
 
 /// Run `job`, giving the output to `sink`. On failure returns false and a
 /// one-line `error` naming the file, channel or option at fault (a sink's

@@ -16,7 +16,7 @@
 #include <OpenImageIO/strutil.h>
 
 #include "atomic_write.h"
-#include "option_names.h"
+#include "options.h"
 
 namespace zdenoise {
 namespace job {
@@ -25,6 +25,7 @@ using OIIO::Strutil::fmt::format;
 namespace Filesystem = OIIO::Filesystem;
 namespace Strutil    = OIIO::Strutil;
 using json           = nlohmann::json;
+using OIIO::TypeDesc;
 
 namespace {
 
@@ -57,106 +58,18 @@ fail(const std::string& message)
 }
 
 
-/// The single-file inputs, by recipe key (the command-line option names).
-struct InputKey {
-    const char* key;
-    InputArg Job::*arg;
-};
-
-const InputKey kInputs[] = {
-    { "in", &Job::in },         { "albedo", &Job::albedo },
-    { "normal", &Job::normal }, { "depth", &Job::depth },
-    { "id", &Job::id },         { "variance", &Job::variance },
-};
-
-struct FlagKey {
-    const char* key;
-    bool Job::*flag;
-};
-
-const FlagKey kFlags[] = { { "no-normal", &Job::no_normal },
-                           { "no-depth", &Job::no_depth },
-                           { "no-id", &Job::no_id },
-                           { "aovs", &Job::write_layers } };
-
-/// Keys whose value is one string of the command line's spelling.
-bool
-is_text_key(const std::string& key)
-{
-    return key == "mode" || key == "residual" || key == "data-type";
-}
-
-/// The colour options (ocio/colour.h), by recipe key (the option names).
-struct ColourKey {
-    const char* key;
-    std::string colour::ColourOptions::*value;
-    bool is_path;  ///< a file, relative to the recipe's folder
-};
-const ColourKey kColourKeys[]
-    = { { "colorconfig", &colour::ColourOptions::config, true },
-        { "iscolorspace", &colour::ColourOptions::input_space, false },
-        { "albedo-colorspace", &colour::ColourOptions::albedo_space, false },
-        { "ocolorspace", &colour::ColourOptions::output_space, false },
-        { "working-colorspace", &colour::ColourOptions::working_space,
-          false } };
-
-const ColourKey*
-find_colour(const std::string& key)
-{
-    for (const ColourKey& k : kColourKeys)
-        if (key == k.key)
-            return &k;
-    return nullptr;
-}
-
-const InputKey*
-find_input(const std::string& key)
-{
-    for (const InputKey& k : kInputs)
-        if (key == k.key)
-            return &k;
-    return nullptr;
-}
-
-const FlagKey*
-find_flag(const std::string& key)
-{
-    for (const FlagKey& k : kFlags)
-        if (key == k.key)
-            return &k;
-    return nullptr;
-}
-
-const FilterOptionName*
-find_filter_option(const std::string& key)
-{
-    for (const FilterOptionName& o : filter_option_names())
-        if (key == o.name)
-            return &o;
-    return nullptr;
-}
-
 /// The keys of a recipe; `in_file_name`: those a file name's REST-style
 /// arguments may override.
 std::string
 known_keys(bool in_file_name)
 {
     std::string s = in_file_name ? "" : kVersionKey;
-    for (const InputKey& k : kInputs)
-        s += (s.empty() ? "" : ", ") + std::string(k.key);
-    if (!in_file_name)
-        s += ", halves";
-    for (const FlagKey& k : kFlags)
-        s += std::string(", ") + k.key;
-    for (const ColourKey& k : kColourKeys)
-        s += std::string(", ") + k.key;
-    if (!in_file_name)
-        s += ", layers";
-    s += ", mode, residual, data-type, preset";
-    for (const FilterOptionName& o : filter_option_names())
-        s += std::string(", ") + o.name;
-    return s + ", threads, tile";
+    for (const Option& o : options())
+        if (o.key && (o.in_file_name || !in_file_name))
+            s += (s.empty() ? "" : ", ") + std::string(o.key);
+    return s;
 }
+
 
 /// A value as the recipe spells it, cut short for messages.
 std::string
@@ -259,19 +172,26 @@ apply_overrides(json& recipe,
 {
     auto preset = overrides.find("preset");
     if (preset != overrides.end()) {
-        for (const FilterOptionName& o : filter_option_names())
-            recipe.erase(o.name);
+        for (const Option& o : options())
+            if (o.parameter)
+                recipe.erase(o.key);
         recipe["preset"] = preset->second;
     }
     for (const auto& [key, text] : overrides) {
-        const FilterOptionName* option = find_filter_option(key);
-        double real                    = 0.0;
-        int whole                      = 0;
-        if (key == "preset") {
+        const Option* option = find_key(key);
+        double real          = 0.0;
+        int whole            = 0;
+        if (key == "preset")
             continue;
-        } else if (find_input(key) || find_colour(key)) {
-            recipe[key] = text;
-        } else if (find_flag(key)) {
+        if (key == kVersionKey || (option && !option->in_file_name))
+            fail(format("argument '{}' cannot be given after the '?'; edit "
+                        "the recipe",
+                        key));
+        if (!option)
+            fail(format("unknown argument '{}' after the '?' (known: {})", key,
+                        known_keys(true)));
+        switch (option->kind) {
+        case Kind::Flag:
             if (text == "1" || text == "true")
                 recipe[key] = true;
             else if (text == "0" || text == "false")
@@ -279,26 +199,110 @@ apply_overrides(json& recipe,
             else
                 fail(format("argument {}={} must be 1, 0, true or false", key,
                             text));
-        } else if (key == "threads" || key == "tile"
-                   || (option && option->whole)) {
+            break;
+        case Kind::Whole:
             if (!parse_whole(text, whole))
                 fail(format("argument {}={} must be a whole number", key,
                             text));
             recipe[key] = whole;
-        } else if (option) {
+            break;
+        case Kind::Real:
             if (!parse_real(text, real))
                 fail(format("argument {}={} must be a number", key, text));
             recipe[key] = real;
-        } else if (is_text_key(key)) {
-            recipe[key] = text;
-        } else if (key == "halves" || key == "layers" || key == kVersionKey) {
-            fail(format("argument '{}' cannot be given after the '?'; edit "
-                        "the recipe",
-                        key));
-        } else {
-            fail(format("unknown argument '{}' after the '?' (known: {})", key,
-                        known_keys(true)));
+            break;
+        default: recipe[key] = text;
         }
+    }
+}
+
+
+/// A string value; `name`: one that may not be empty.
+std::string
+parse_string(const std::string& key, const json& value, bool name)
+{
+    if (!value.is_string() || (name && value.get<std::string>().empty()))
+        fail(format(name ? "\"{}\" must be a name in a string, not {}"
+                         : "\"{}\" must be a string, not {}",
+                    key, shown(value)));
+    return value.get<std::string>();
+}
+
+
+/// Set `option` of `command` from its recipe value.
+void
+parse_option(const Option& option, const json& value,
+             const std::string& folder, Command& command)
+{
+    const std::string key = option.key;
+    switch (option.kind) {
+    case Kind::Input:
+        std::get<Field<InputArg>>(option.field)(command)
+            = parse_input(key, value, folder);
+        break;
+    case Kind::Halves:
+        if (!value.is_array() || value.size() != 2)
+            fail(format("\"halves\" must be a list of two inputs, not {}",
+                        shown(value)));
+        command.job.half_a = parse_input(key, value[0], folder);
+        command.job.half_b = parse_input(key, value[1], folder);
+        break;
+    case Kind::Flag:
+        if (!value.is_boolean())
+            fail(format("\"{}\" must be true or false, not {}", key,
+                        shown(value)));
+        std::get<Field<bool>>(option.field)(command) = value.get<bool>();
+        break;
+    case Kind::Text:
+    case Kind::Name:
+    case Kind::Path: {
+        std::string text = parse_string(key, value, option.kind != Kind::Text);
+        if (option.kind == Kind::Path && !folder.empty()
+            && !Filesystem::path_is_absolute(text))
+            text = folder + "/" + text;
+        std::get<Field<std::string>>(option.field)(command) = text;
+        break;
+    }
+    case Kind::Layers: {
+        if (!value.is_array())
+            fail(format("\"layers\" must be a list of "
+                        "\"NAME=RADIANCE:ALBEDO[:divided][:reflected]\", not {}",
+                        shown(value)));
+        std::vector<LayerArg>& layers
+            = std::get<Field<std::vector<LayerArg>>>(option.field)(command);
+        for (const json& layer : value) {
+            layers.emplace_back();
+            if (!layer.is_string()
+                || !parse_layer(layer.get<std::string>(), layers.back()))
+                fail(format("\"layers\": each must be "
+                            "\"NAME=RADIANCE:ALBEDO[:divided][:reflected]\", not {}",
+                            shown(layer)));
+        }
+        break;
+    }
+    case Kind::Mode:
+    case Kind::DataType: {
+        const std::string text = parse_string(key, value, false);
+        const bool mode        = option.kind == Kind::Mode;
+        if (!(mode ? parse_mode(text,
+                                std::get<Field<Mode>>(option.field)(command))
+                   : parse_data_type(
+                       text, std::get<Field<TypeDesc>>(option.field)(command))))
+            fail(format("\"{}\" must be {}, not {}", key,
+                        mode ? "\"beauty\" or \"layers\""
+                             : "\"half\" or \"float\"",
+                        shown(value)));
+        break;
+    }
+    case Kind::Whole:
+        std::get<Field<int>>(option.field)(command)
+            = parse_whole_number(key, value);
+        break;
+    case Kind::Real:
+        std::get<Field<float>>(option.field)(command) = parse_float(key,
+                                                                    value);
+        break;
+    default: break;  // the preset is applied first
     }
 }
 
@@ -333,99 +337,30 @@ parse(const std::string& text, const std::string& folder,
                     version.get<int>(), kRecipeFormatVersion));
     apply_overrides(recipe, overrides);
 
-    Job job;
+    Command command;
     // The preset is the base the other filter options modify, as on the
     // command line.
     if (recipe.contains("preset")) {
         const json& preset = recipe.at("preset");
         if (!preset.is_string())
             fail(format("\"preset\" must be a string, not {}", shown(preset)));
-        if (!apply_preset(preset.get<std::string>(), job.filter))
+        if (!apply_preset(preset.get<std::string>(), command.job.filter))
             fail(format("unknown preset '{}' (known: {})",
                         preset.get<std::string>(), preset_names()));
     }
     for (const auto& item : recipe.items()) {
-        const std::string& key = item.key();
-        const json& value      = item.value();
-        if (key == kVersionKey || key == "preset") {
+        if (item.key() == kVersionKey)
             continue;
-        } else if (const InputKey* input = find_input(key)) {
-            job.*(input->arg) = parse_input(key, value, folder);
-        } else if (key == "halves") {
-            if (!value.is_array() || value.size() != 2)
-                fail(format("\"halves\" must be a list of two inputs, not {}",
-                            shown(value)));
-            job.half_a = parse_input("halves", value[0], folder);
-            job.half_b = parse_input("halves", value[1], folder);
-        } else if (const FlagKey* flag = find_flag(key)) {
-            if (!value.is_boolean())
-                fail(format("\"{}\" must be true or false, not {}", key,
-                            shown(value)));
-            job.*(flag->flag) = value.get<bool>();
-        } else if (const ColourKey* colour = find_colour(key)) {
-            if (!value.is_string() || value.get<std::string>().empty())
-                fail(format("\"{}\" must be a name in a string, not {}", key,
-                            shown(value)));
-            std::string text = value.get<std::string>();
-            if (colour->is_path && !folder.empty()
-                && !Filesystem::path_is_absolute(text))
-                text = folder + "/" + text;
-            job.colour.*(colour->value) = text;
-        } else if (key == "layers") {
-            if (!value.is_array())
-                fail(format("\"layers\" must be a list of "
-                            "\"NAME=RADIANCE:ALBEDO[:divided][:reflected]\", not {}",
-                            shown(value)));
-            for (const json& layer : value) {
-                job.layers.emplace_back();
-                if (!layer.is_string()
-                    || !parse_layer(layer.get<std::string>(),
-                                    job.layers.back()))
-                    fail(format("\"layers\": each must be "
-                                "\"NAME=RADIANCE:ALBEDO[:divided][:reflected]\", not {}",
-                                shown(layer)));
-            }
-        } else if (is_text_key(key)) {
-            if (!value.is_string())
-                fail(format("\"{}\" must be a string, not {}", key,
-                            shown(value)));
-            const std::string text = value.get<std::string>();
-            if (key == "residual")
-                job.residual = text;
-            else if (key == "mode" && !parse_mode(text, job.mode))
-                fail(format("\"mode\" must be \"beauty\" or \"layers\", not "
-                            "{}",
-                            shown(value)));
-            else if (key == "data-type"
-                     && !parse_data_type(text, job.data_type))
-                fail(format("\"data-type\" must be \"half\" or \"float\", not "
-                            "{}",
-                            shown(value)));
-        } else if (key == "threads") {
-            job.threads = parse_whole_number(key, value);
-            if (job.threads < 0)
-                fail(format("\"threads\" must be 0 (automatic) or more, not "
-                            "{}",
-                            job.threads));
-        } else if (key == "tile") {
-            job.tile_rows = parse_whole_number(key, value);
-            if (job.tile_rows < 0)
-                fail(format("\"tile\" must be 0 (automatic) or a number of "
-                            "rows, not {}",
-                            job.tile_rows));
-        } else if (const FilterOptionName* option = find_filter_option(key)) {
-            if (option->whole)
-                job.filter.*(option->whole) = parse_whole_number(key, value);
-            else
-                job.filter.*(option->real) = parse_float(key, value);
-        } else {
-            fail(format("unknown key \"{}\" (known: {})", key,
+        const Option* option = find_key(item.key());
+        if (!option)
+            fail(format("unknown key \"{}\" (known: {})", item.key(),
                         known_keys(false)));
-        }
+        parse_option(*option, item.value(), folder, command);
     }
-    if (!job.in.given)
-        fail("no noisy input: the recipe needs \"in\"");
-    return job;
+    const std::string invalid = validate(command.job, Spelling::Recipe);
+    if (!invalid.empty())
+        fail(invalid);
+    return command.job;
 }
 
 
@@ -544,48 +479,77 @@ std::string
 recipe_text(const Job& job, const std::string& preset,
             const std::string& folder)
 {
+    Command command;
+    command.job    = job;
+    command.preset = preset;
     nlohmann::ordered_json recipe;
     recipe[kVersionKey] = kRecipeFormatVersion;
-    for (const InputKey& k : kInputs)
-        if ((job.*(k.arg)).given)
-            recipe[k.key] = input_json(job.*(k.arg), folder);
-    if (job.half_a.given)
-        recipe["halves"] = nlohmann::ordered_json::array(
-            { input_json(job.half_a, folder), input_json(job.half_b, folder) });
-    for (const FlagKey& k : kFlags)
-        if (job.*(k.flag))
-            recipe[k.key] = true;
-    for (const ColourKey& k : kColourKeys) {
-        const std::string& text = job.colour.*(k.value);
-        if (!text.empty())
-            recipe[k.key] = k.is_path ? relative_path(text, folder) : text;
-    }
-    if (job.mode != Mode::Auto)
-        recipe["mode"] = mode_name(job.mode);
-    if (!job.layers.empty()) {
-        recipe["layers"] = nlohmann::ordered_json::array();
-        for (const LayerArg& layer : job.layers)
-            recipe["layers"].push_back(layer_text(layer));
-    }
-    if (!job.residual.empty())
-        recipe["residual"] = job.residual;
-    if (job.data_type != OIIO::TypeUnknown)
-        recipe["data-type"] = job.data_type.c_str();
-    recipe["preset"] = preset;
-    for (const FilterOptionName& o : filter_option_names()) {
-        if (o.whole) {
-            recipe[o.name] = job.filter.*(o.whole);
-        } else {
+    for (const Option& o : options()) {
+        if (!o.key)
+            continue;
+        nlohmann::ordered_json value;
+        switch (o.kind) {
+        case Kind::Input: {
+            const InputArg& arg = std::get<Field<InputArg>>(o.field)(command);
+            if (arg.given)
+                value = input_json(arg, folder);
+            break;
+        }
+        case Kind::Halves:
+            if (job.half_a.given)
+                value = nlohmann::ordered_json::array(
+                    { input_json(job.half_a, folder),
+                      input_json(job.half_b, folder) });
+            break;
+        case Kind::Flag:
+            if (std::get<Field<bool>>(o.field)(command))
+                value = true;
+            break;
+        case Kind::Text:
+        case Kind::Name:
+        case Kind::Path:
+        case Kind::Preset: {
+            const std::string& text = std::get<Field<std::string>>(o.field)(
+                command);
+            if (!text.empty() || o.always_written)
+                value = o.kind == Kind::Path ? relative_path(text, folder)
+                                             : text;
+            break;
+        }
+        case Kind::Mode:
+            if (job.mode != Mode::Auto)
+                value = mode_name(job.mode);
+            break;
+        case Kind::Layers:
+            if (!job.layers.empty()) {
+                value = nlohmann::ordered_json::array();
+                for (const LayerArg& layer : job.layers)
+                    value.push_back(layer_text(layer));
+            }
+            break;
+        case Kind::DataType:
+            if (job.data_type != OIIO::TypeUnknown)
+                value = job.data_type.c_str();
+            break;
+        case Kind::Whole: {
+            // Only when given unless always written: a recipe without
+            // "tile" stays readable by a plugin that predates strips.
+            const int whole = std::get<Field<int>>(o.field)(command);
+            if (whole > 0 || o.always_written)
+                value = whole;
+            break;
+        }
+        case Kind::Real:
             // The shortest decimal that reads back as the same float
             // ("0.02", not 0.019999999552965164).
-            recipe[o.name] = std::stod(format("{}", job.filter.*(o.real)));
+            value = std::stod(
+                format("{}", std::get<Field<float>>(o.field)(command)));
+            break;
+        default: break;
         }
+        if (!value.is_null())
+            recipe[o.key] = value;
     }
-    recipe["threads"] = job.threads;
-    // Only when given: a recipe without it stays readable by a plugin that
-    // predates strips.
-    if (job.tile_rows > 0)
-        recipe["tile"] = job.tile_rows;
     return recipe.dump(2) + "\n";
 }
 

@@ -25,6 +25,7 @@
 #include "../../src/job/channel_spec.h"
 #include "../../src/job/job.h"
 #include "../../src/job/layer_conventions.h"
+#include "../../src/job/options.h"
 
 using namespace zdenoise::job;
 

@@ -1,0 +1,213 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+
+#include "layers_plan.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imagebufalgo_util.h>
+#include <OpenImageIO/strutil.h>
+
+#include "failure.h"
+
+namespace zdenoise {
+namespace job {
+
+using namespace OIIO;
+using OIIO::Strutil::fmt::format;
+
+namespace {
+
+/// Where the residual layer is negligible against the beauty in a whole
+/// neighbourhood, set its albedo to 0, so that the filter passes it through
+/// there. Beauty minus layers leaves a residue of the passes' half-float
+/// rounding wherever the residual is really empty; relative to its own
+/// (zero) level that residue is pure noise, and the filter would grow every
+/// window there to r_max for nothing (it made layered mode 5-10x slower than
+/// beauty mode). Pixels within `reach` of a real residual stay: an emitter's
+/// anti-aliased edge has pixels whose few coverage samples all missed it,
+/// and the filter gives them their share of its light. All three images
+/// are float.
+void
+mask_negligible_residual(ImageBuf& albedo, const ImageBuf& residual,
+                         const ImageBuf& beauty, int reach, int nthreads)
+{
+    // Half floats carry 11 bits: a residue of several rounded passes stays
+    // below about 2^-9 of the beauty.
+    constexpr float kNegligible = 1.0f / 512.0f;
+    ImageSpec spec(albedo.roi(), TypeFloat);
+    spec.nchannels = 1;
+    spec.channelnames = { "Y" };
+    ImageBuf real(spec), near_real;
+    ImageBufAlgo::parallel_image(
+        albedo.roi(), paropt(nthreads), [&](ROI roi) {
+            roi.chbegin = 0;
+            roi.chend   = 3;
+            ImageBuf::ConstIterator<float> r(residual, roi), b(beauty, roi);
+            ImageBuf::Iterator<float> m(real, roi);
+            for (; !m.done(); ++m, ++r, ++b) {
+                float res = 0.0f, total = 0.0f;
+                for (int c = 0; c < 3; ++c) {
+                    res   = std::max(res, std::fabs(r[c]));
+                    total = std::max(total, std::fabs(b[c]));
+                }
+                m[0] = res > kNegligible * total ? 1.0f : 0.0f;
+            }
+        });
+    ImageBufAlgo::dilate(near_real, real, 2 * reach + 1, 2 * reach + 1, {},
+                         nthreads);
+    ImageBufAlgo::parallel_image(
+        albedo.roi(), paropt(nthreads), [&](ROI roi) {
+            ImageBuf::ConstIterator<float> m(near_real, roi);
+            for (ImageBuf::Iterator<float> a(albedo, roi); !a.done(); ++a, ++m)
+                if (!(m[0] > 0.0f))
+                    for (int c = roi.chbegin; c < roi.chend; ++c)
+                        a[c] = 0.0f;
+        });
+}
+
+}  // namespace
+
+
+/// Choose the layers and the residual; the residual is, unless selected,
+/// the beauty minus the sum of the unfiltered layers, so that nothing of
+/// the beauty is lost (in Cycles: Emit + Env, and any lobe whose passes
+/// were not written). With `residual_albedo`, the residual becomes one
+/// more layer, denoised with that albedo (see Convention::residual_albedo).
+LayersPlan
+plan_layers(InputFiles& files, const Job& j,
+            const std::vector<LayerArg>& args, const std::string& residual,
+            const std::string& residual_albedo,
+            const std::string& residual_layer,
+            const std::string& residual_unfiltered, const ROI& noisy,
+            std::vector<std::string>& log)
+{
+    LayersPlan plan;
+    for (const LayerArg& a : args) {
+        std::string shown_radiance, shown_albedo;
+        LayersPlan::One one;
+        one.name      = a.name;
+        one.divided   = a.divided;
+        one.reflected = a.reflected;
+        one.radiance = select_sum(files, j.in.path, a.radiance, noisy,
+                                  shown_radiance);
+        one.albedo   = select_sum(files, j.in.path, a.albedo, noisy,
+                                  shown_albedo);
+        plan.layers.push_back(std::move(one));
+        log.push_back(format("  layer     {}: {} with albedo {}{}{}", a.name,
+                             shown_radiance, shown_albedo,
+                             a.divided ? " (divided by it)" : "",
+                             a.reflected ? " (reflected: stricter edge test)"
+                                         : ""));
+    }
+    std::string shown_residual = "the beauty minus the layers";
+    if (!residual.empty()) {
+        shown_residual.clear();
+        plan.residual = select_sum(files, j.in.path, residual, noisy,
+                                   shown_residual);
+    }
+    if (residual_albedo.empty()) {
+        log.push_back("  residual  " + shown_residual + ", not filtered");
+        return plan;
+    }
+    std::string shown_albedo;
+    LayersPlan::One one;
+    one.name   = residual_layer;
+    one.albedo = select_sum(files, j.in.path, residual_albedo, noisy,
+                            shown_albedo);
+    plan.layers.push_back(std::move(one));
+    plan.residual_is_layer = true;
+    plan.reach             = std::max(j.filter.r_max, 0);
+    if (!residual_unfiltered.empty()) {
+        std::string shown_unfiltered;
+        plan.residual_unfiltered = select_sum(files, j.in.path,
+                                              residual_unfiltered, noisy,
+                                              shown_unfiltered);
+        shown_residual += " minus " + shown_unfiltered;
+        log.push_back("  residual  " + shown_unfiltered + ", not filtered");
+    }
+    log.push_back(format("  layer     {}: {} with albedo {}", residual_layer,
+                         shown_residual, shown_albedo));
+    return plan;
+}
+
+
+/// Read the strip's layers and residual as `plan` says.
+std::vector<Layer>
+load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
+            const ImageBuf& beauty, LoadedLayers& l)
+{
+    const size_t n = plan.layers.size();
+    l.radiance.assign(n, ImageBuf());
+    l.albedo.assign(n, ImageBuf());
+    l.denoised.assign(n, ImageBuf());
+    l.stats.assign(n, FilterStats());
+    l.residual.reset();
+    std::vector<Layer> layers(n);
+    const size_t given = plan.residual_is_layer ? n - 1 : n;
+    for (size_t i = 0; i < n; ++i) {
+        const LayersPlan::One& one = plan.layers[i];
+        if (i < given)
+            l.radiance[i] = strip.sum(one.radiance);
+        // The residual layer's albedo is masked below: a copy of its own.
+        l.albedo[i]         = strip.sum(one.albedo, i < given);
+        layers[i].name      = one.name;
+        layers[i].radiance  = &l.radiance[i];
+        layers[i].albedo    = &l.albedo[i];
+        layers[i].divided   = one.divided;
+        layers[i].reflected = one.reflected;
+        layers[i].denoised  = &l.denoised[i];
+        layers[i].stats     = &l.stats[i];
+    }
+    if (!plan.residual.empty()) {
+        l.residual = strip.sum(plan.residual, !plan.residual_is_layer);
+    } else {
+        std::vector<Layer> unfiltered(layers.begin(),
+                                      layers.begin() + long(given));
+        for (Layer& layer : unfiltered) {
+            layer.filter   = false;
+            layer.denoised = nullptr;
+            layer.stats    = nullptr;
+        }
+        ImageBuf sum;
+        ROI rgb     = beauty.roi();
+        rgb.chbegin = 0;
+        rgb.chend   = 3;
+        // RGB only: the beauty's alpha would mark the residual's pixels
+        // "no surface" for the filter.
+        l.residual.reset(ImageSpec(rgb, TypeFloat));
+        FilterOptions sum_options = j.filter;
+        sum_options.progress      = nullptr;
+        if (!layered_denoise(sum, unfiltered, nullptr, {}, sum_options,
+                             nullptr, rgb, j.threads)
+            || !ImageBufAlgo::sub(l.residual, beauty, sum, rgb, j.threads))
+            fail(format("layers of '{}': {}", j.in.path,
+                        one_line(sum.has_error() ? sum.geterror()
+                                                 : l.residual.geterror())));
+    }
+    if (!plan.residual_is_layer)
+        return layers;
+    const size_t i = n - 1;
+    l.radiance[i].swap(l.residual);  // l.residual: uninitialized again
+    if (!plan.residual_unfiltered.empty()) {
+        l.residual = strip.sum(plan.residual_unfiltered);
+        if (!ImageBufAlgo::sub(l.radiance[i], l.radiance[i], l.residual, {},
+                               j.threads))
+            fail(format("layers of '{}': {}", j.in.path,
+                        one_line(l.radiance[i].geterror())));
+    }
+    // The mask reads float images; the beauty may be the file's half rows.
+    const ImageBuf beauty_float = beauty.spec().format == TypeFloat
+                                      ? ImageBuf()
+                                      : beauty.copy(TypeFloat);
+    mask_negligible_residual(l.albedo[i], l.radiance[i],
+                             beauty_float.initialized() ? beauty_float
+                                                        : beauty,
+                             plan.reach, j.threads);
+    return layers;
+}
+
+}  // namespace job
+}  // namespace zdenoise

@@ -1,0 +1,74 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Layered denoising's plan and its reading: which channel sums are each
+// layer's radiance and albedo, what is the residual (given, or the beauty
+// minus the layers, or a layer of its own with its negligible parts
+// masked), and, per strip, those images read. Kept apart from job.cpp
+// because layers are a job of their own inside the job: only --mode layers
+// reaches this file.
+
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imagebuf.h>
+
+#include <zdenoise/zdenoise.h>
+
+#include "input_files.h"
+#include "layer_conventions.h"
+#include "strips.h"
+
+namespace zdenoise {
+namespace job {
+
+/// The layers of a layered denoise as channel selections: each layer's
+/// radiance and albedo sums, and the residual.
+struct LayersPlan {
+    struct One {
+        std::string name;
+        std::vector<Selection> radiance, albedo;
+        bool divided = false, reflected = false;
+    };
+    std::vector<One> layers;  ///< the given ones, then the residual's
+    /// The residual's terms; none: the beauty minus the given layers.
+    std::vector<Selection> residual;
+    /// The residual is denoised as the last layer (residual_albedo), but for
+    /// these terms, added as they are (residual_unfiltered).
+    bool residual_is_layer = false;
+    std::vector<Selection> residual_unfiltered;
+    /// How far mask_negligible_residual() looks: rows a strip reads beyond
+    /// the filter's halo (0 without a residual layer).
+    int reach = 0;
+};
+
+/// Choose the layers and the residual; the residual is, unless selected,
+/// the beauty minus the sum of the unfiltered layers, so that nothing of
+/// the beauty is lost (in Cycles: Emit + Env, and any lobe whose passes
+/// were not written). With `residual_albedo`, the residual becomes one
+/// more layer, denoised with that albedo (see Convention::residual_albedo).
+LayersPlan
+plan_layers(InputFiles& files, const Job& j,
+            const std::vector<LayerArg>& args, const std::string& residual,
+            const std::string& residual_albedo,
+            const std::string& residual_layer,
+            const std::string& residual_unfiltered, const OIIO::ROI& noisy,
+            std::vector<std::string>& log);
+
+
+/// The layers of one strip, read.
+struct LoadedLayers {
+    std::vector<OIIO::ImageBuf> radiance, albedo, denoised;
+    std::vector<FilterStats> stats;
+    OIIO::ImageBuf residual;
+};
+
+/// Read the strip's layers and residual as `plan` says.
+std::vector<Layer>
+load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
+            const OIIO::ImageBuf& beauty, LoadedLayers& l);
+
+}  // namespace job
+}  // namespace zdenoise

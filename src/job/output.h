@@ -1,0 +1,65 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// The output: its layout (the --in file's channels, with the radiance
+// replaced by the denoised beauty and, with --aovs, the denoised layers
+// added; each channel's pixel type), the assembly of each strip's output
+// rows, and the sinks they go to (an image in memory, a file). The pixel
+// format of the output file is chosen by native_spec() (job.h), which
+// the OIIO plugin uses too.
+
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imagebuf.h>
+
+#include "input_files.h"
+#include "layers_plan.h"
+#include "strips.h"
+
+namespace zdenoise {
+namespace job {
+
+/// One channel of the output and where its pixels come from: a channel of
+/// the --in file, or a channel of a denoised image of the strip.
+struct OutputChannel {
+    int file = -1;  ///< channel of the --in file, or -1
+    int image = -1, image_channel = 0;  ///< else: denoised image, channel
+    OIIO::TypeDesc type;  ///< pixel type in the output
+};
+
+/// The output of job `j`: the --in file `in` with its radiance RGB (the
+/// channels `radiance` selects) replaced and, with --aovs, the denoised
+/// layers of `layers` added; each channel in its input pixel type unless
+/// -d says otherwise, Cryptomatte float. Images: 0 the denoised beauty,
+/// 1 + i layer i. `spec` is as an ImageBuf of the --in file's pixels has
+/// it (part 0's spec, the channels and metadata of every part).
+void
+layout_output(const Job& j, const InputHeader& in, const Selection& radiance,
+              const LayersPlan& layers, OIIO::ImageSpec& spec,
+              std::vector<OutputChannel>& channels,
+              std::vector<OIIO::TypeDesc>& formats);
+
+/// Where the output of one strip comes from and goes to.
+struct Output {
+    OutputSink* sink = nullptr;
+    OIIO::ImageSpec spec;
+    std::vector<OutputChannel> channels;
+    std::vector<OIIO::TypeDesc> row_types;  ///< as the sink takes them
+    std::vector<size_t> offset;             ///< of each channel in a pixel
+    size_t pixel_bytes = 0;
+    std::vector<unsigned char> band, plane;
+
+    void set_row_types(bool float_rows);
+
+    /// Assemble the output rows of `strip` band by band and give them to
+    /// the sink: channels of the --in file moved from its rows (in runs of
+    /// neighbours of one type), the others from the denoised `images`.
+    void write(const Strip& strip, const RowReader& in,
+               const std::vector<const OIIO::ImageBuf*>& images, int threads);
+};
+
+}  // namespace job
+}  // namespace zdenoise
