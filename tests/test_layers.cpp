@@ -571,6 +571,45 @@ TEST_F(LayersCli, CryptomatteRanksAreTheObjectIdGuide)
 }
 
 
+// Half buffers given as Cycles files of their own take their Combined pass,
+// as --in does, not the file's first three channels (CryptoObject00.r,g,b
+// in a Cycles file): the command gives what the library gives with the
+// halves' radiance.
+TEST_F(LayersCli, CyclesHalvesTakeTheirCombinedPass)
+{
+    synth::Scene s = synth::two_objects_cryptomatte(W, H, { 16, 707 }, 0.2f);
+    ImageBuf alpha = constant(1.0f, 1);
+    const std::string P = "ViewLayer.";
+    auto write = [&](const ImageBuf& radiance, const std::string& name) {
+        std::vector<Channel> ch;
+        add_rgb(ch, P + "Combined", radiance);
+        ch.push_back({ P + "Combined.A", &alpha, 0 });
+        add_rgb(ch, P + "CryptoObject00", s.object_id, "rgba");
+        add_rgb(ch, P + "Denoising Albedo", s.albedo);
+        ImageBuf img = assemble(ch);
+        EXPECT_TRUE(img.write(path(name))) << img.geterror();
+        return path(name);
+    };
+    const std::string in = write(s.noisy, "frame.exr");
+    const std::string a = write(s.half_a, "half_a.exr"), b = write(s.half_b, "half_b.exr");
+    RunResult res = run("--in " + in + " --halves " + a + " " + b + " -o "
+                        + path("out.exr") + " -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_NE(res.out.find("half A    '" + a + "' channels ViewLayer.Combined.R,"
+                           "ViewLayer.Combined.G,ViewLayer.Combined.B"),
+              std::string::npos)
+        << res.out;
+    zdenoise::Guides g;
+    g.object_id   = &s.object_id;
+    g.half_a      = &s.half_a;
+    g.half_b      = &s.half_b;
+    ImageBuf want = zdenoise::denoise(s.noisy, s.albedo, g);
+    ImageBuf out(path("out.exr"));
+    ASSERT_TRUE(out.read(0, 0, true, TypeFloat));
+    EXPECT_LT(max_rel_diff(out, want), 1e-6f);
+}
+
+
 TEST_F(LayersCli, OutputTypeOptionKeepsCryptomatteFloat)
 {
     LobeRender r;

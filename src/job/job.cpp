@@ -54,6 +54,23 @@ apply_defaults(Job& j, const Convention& conv, std::vector<std::string>& log)
 }
 
 
+/// A half buffer given as a file of its own without a :ch= selection takes
+/// that file's beauty where its convention names one (a Cycles multilayer
+/// file's Combined), as --in does, never the file's first three channels
+/// (a Cycles file's are CryptoObject00.r, g, b).
+void
+apply_half_defaults(Job& j, InputFiles& files)
+{
+    for (InputArg* half : { &j.half_a, &j.half_b })
+        if (half->given && half->channels.empty()) {
+            const Convention c
+                = detect_convention(files.header(half->path).channelnames);
+            if (!c.beauty.empty())
+                half->channels = c.beauty;
+        }
+}
+
+
 /// The job's colour spaces, or none when no config is found and the user
 /// asked for nothing (the OIIO plugin outside an installation): then the
 /// pixels are filtered as they are.
@@ -144,6 +161,7 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
     const InputHeader& in = files.header(j.in.path);
     const Convention conv = detect_convention(in.channelnames);
     apply_defaults(j, conv, result.log);
+    apply_half_defaults(j, files);
     const std::vector<LayerArg>& layer_args = j.layers.empty() ? conv.layers
                                                                : j.layers;
     if (j.mode == Mode::Layers && layer_args.empty())

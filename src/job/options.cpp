@@ -212,8 +212,9 @@ options()
           "channel's input type). Cryptomatte channels stay float." },
         always_written({ Kind::Preset, "--preset", "preset", FIELD(preset), "NAME",
           "Start from a parameter set: 'tuned' (default, tuned on\n"
-          "the public benchmark) or 'spec' (ALGORITHM.md section\n"
-          "8: edge-k 3, value-k 2, sigma-good 1); the options\n"
+          "the public benchmark) or 'spec' (the method's own,\n"
+          "docs/FILTER.md section 9: edge-k 3, value-k 2,\n"
+          "sigma-good 1); the options\n"
           "below override it wherever they stand." }),
         parameter({ Kind::Whole, "--rmin", "rmin", FIELD(job.filter.r_min), "N",
           "Smallest window half-size (default 2)" }),
@@ -248,7 +249,7 @@ options()
           "faster again, up to 27% worse relMSE) (1)" }),
         parameter({ Kind::Real, "--radius-growth", "radius-growth", FIELD(job.filter.radius_growth), "X",
           "Radius tried after R: max(R+1, R*X) (2: radii 2, 4, 8,\n"
-          "16; 1 = ALGORITHM.md's R+1, as --preset spec)" }),
+          "16; 1 = the method's R+1, as --preset spec)" }),
         always_written({ Kind::Whole, "--threads", "threads", FIELD(job.threads), "N",
           "Threads (default: all cores); results do not depend\n"
           "on it." }),
