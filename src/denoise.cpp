@@ -56,12 +56,9 @@ denoise(const ImageBuf& radiance, const ImageBuf& albedo, const Guides& guides,
         const FilterOptions& options, FilterStats* stats, ROI roi,
         int nthreads)
 {
-    ImageBuf result;
-    if (!denoise(result, radiance, albedo, guides, options, stats, roi,
-                 nthreads)
-        && !result.has_error())
-        result.errorfmt("denoise error");
-    return result;
+    return detail::returned_image("denoise", [&](ImageBuf& result) {
+        return denoise(result, radiance, albedo, guides, options, stats, roi, nthreads);
+    });
 }
 
 }  // namespace zdenoise

@@ -59,6 +59,19 @@ bool
 check_frame(ImageBuf& dst, const char* opname, const ROI& roi,
             const ROI& frame);
 
+/// The ImageBuf-returning form of an operation (as OIIO's): `op(result)`
+/// runs the bool form into a fresh result; a failure that left no message
+/// gets "<opname> error".
+template<class Op>
+ImageBuf
+returned_image(const char* opname, Op&& op)
+{
+    ImageBuf result;
+    if (!op(result) && !result.has_error())
+        result.errorfmt("{} error", opname);
+    return result;
+}
+
 /// Make dst ready as the float result of an op whose first input is `src`
 /// and set roi (default: src's data window) to the pixels to compute.
 bool

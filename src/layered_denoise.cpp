@@ -194,12 +194,9 @@ layered_denoise(const std::vector<Layer>& layers, const ImageBuf* residual,
                 const Guides& guides, const FilterOptions& options,
                 FilterStats* stats, ROI roi, int nthreads)
 {
-    ImageBuf result;
-    if (!layered_denoise(result, layers, residual, guides, options, stats,
-                         roi, nthreads)
-        && !result.has_error())
-        result.errorfmt("layered_denoise error");
-    return result;
+    return detail::returned_image("layered_denoise", [&](ImageBuf& result) {
+        return layered_denoise(result, layers, residual, guides, options, stats, roi, nthreads);
+    });
 }
 
 }  // namespace zdenoise

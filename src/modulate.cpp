@@ -88,11 +88,9 @@ ImageBuf
 demodulate(const ImageBuf& radiance, const ImageBuf& albedo, float albedo_eps,
            ROI roi, int nthreads)
 {
-    ImageBuf result;
-    if (!demodulate(result, radiance, albedo, albedo_eps, roi, nthreads)
-        && !result.has_error())
-        result.errorfmt("demodulate error");
-    return result;
+    return detail::returned_image("demodulate", [&](ImageBuf& result) {
+        return demodulate(result, radiance, albedo, albedo_eps, roi, nthreads);
+    });
 }
 
 
@@ -109,11 +107,9 @@ ImageBuf
 remodulate(const ImageBuf& quotient, const ImageBuf& albedo, float albedo_eps,
            ROI roi, int nthreads)
 {
-    ImageBuf result;
-    if (!remodulate(result, quotient, albedo, albedo_eps, roi, nthreads)
-        && !result.has_error())
-        result.errorfmt("remodulate error");
-    return result;
+    return detail::returned_image("remodulate", [&](ImageBuf& result) {
+        return remodulate(result, quotient, albedo, albedo_eps, roi, nthreads);
+    });
 }
 
 }  // namespace zdenoise

@@ -286,12 +286,9 @@ regression_filter(const ImageBuf& quotient, const ImageBuf& albedo,
                   const Guides& guides, const FilterOptions& options,
                   FilterStats* stats, ROI roi, int nthreads)
 {
-    ImageBuf result;
-    if (!regression_filter(result, quotient, albedo, guides, options, stats,
-                           roi, nthreads)
-        && !result.has_error())
-        result.errorfmt("regression_filter error");
-    return result;
+    return detail::returned_image("regression_filter", [&](ImageBuf& result) {
+        return regression_filter(result, quotient, albedo, guides, options, stats, roi, nthreads);
+    });
 }
 
 }  // namespace zdenoise
