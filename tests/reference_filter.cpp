@@ -332,6 +332,7 @@ private:
         double m = 0.0;  // mean zl over P_R
         Fit whole, quad[4];
         double lo[3] = { INF, INF, INF }, hi[3] = { -INF, -INF, -INF };  // z over G_R
+        double llo[3] = { INF, INF, INF }, lhi[3] = { -INF, -INF, -INF };  // radiance over G_R
         double eta  = INF;
         bool edge   = false;
     };
@@ -587,6 +588,9 @@ Filter::window(int x0, int y0, int R) const
         for (int c = 0; c < 3; ++c) {
             W.lo[c] = std::min(W.lo[c], p.z[c]);
             W.hi[c] = std::max(W.hi[c], p.z[c]);
+            const double L = p.z[c] * (double(La.at(x, y, c)) + double(opt.albedo_eps));
+            W.llo[c] = std::min(W.llo[c], L);
+            W.lhi[c] = std::max(W.lhi[c], L);
         }
         good.push_back(p);
     }
@@ -746,8 +750,13 @@ Filter::run(RefStats* stats)
                         }
                         A = (Z + wm * Zm) / (1.0 + wm);
                     }
-                    // within the range of z over the window's good points
+                    // within the range of z over the window's good points,
+                    // then within their radiance at this pixel's albedo
                     A = std::min(std::max(A, fin.lo[c]), fin.hi[c]);
+                    if (receiver_[idx(xq, yq) * 3 + c]) {
+                        const double a = double(La.at(xq, yq, c)) + double(opt.albedo_eps);
+                        A = std::min(std::max(A, fin.llo[c] / a), fin.lhi[c] / a);
+                    }
                     acc[idx(xq, yq) * 3 + c] += s * A;
                 }
                 wsum[idx(xq, yq)] += s;

@@ -23,20 +23,29 @@ namespace {
 /// sigma <= sigma_good, and zl, vs, sigma, cls padded likewise.
 void
 prepare_fit_planes(FilterInputs& in, const std::vector<float>& z,
+                   const std::vector<float>& albedo, float albedo_eps,
                    float sigma_good, int nthreads)
 {
     const size_t npix = in.region.npixels();
     auto fit = [&](size_t i) { return (in.cls[i] & kFitPoint) != 0; };
-    for (int c = 0; c < 3; ++c)
+    for (int c = 0; c < 3; ++c) {
         in.zfit[c].assign(npix + kPlanePadding, 0.0f);
+        in.lfit[c].assign(npix + kPlanePadding, 0.0f);
+        in.inv_albedo[c].assign(npix + kPlanePadding, 0.0f);
+    }
     in.fit_prior.assign(npix + kPlanePadding, 0.0f);
     for_rows(in.region, nthreads, [&](int y) {
         for (size_t i = in.index(in.region.xbegin, y), e = i + in.width; i < e;
              ++i) {
+            for (int c = 0; c < 3; ++c)
+                if (in.cls[i] & (kReceiveR << c))
+                    in.inv_albedo[c][i] = 1.0f / (albedo[3 * i + c] + albedo_eps);
             if (!fit(i))
                 continue;
-            for (int c = 0; c < 3; ++c)
+            for (int c = 0; c < 3; ++c) {
                 in.zfit[c][i] = z[3 * i + c];
+                in.lfit[c][i] = z[3 * i + c] * (albedo[3 * i + c] + albedo_eps);
+            }
             if (in.sigma[i] <= sigma_good)
                 in.fit_prior[i] = std::exp(-in.sigma[i]);
         }
@@ -89,7 +98,7 @@ decode_filter_inputs(FilterInputs& in, ImageBuf& dst, const ImageBuf& quotient,
         return false;
     classify_pixels(in, z, alb, alpha, depth, opt.albedo_eps, nthreads);
     estimate_noise(in, guides, alb, opt.albedo_eps, nthreads);
-    prepare_fit_planes(in, z, opt.sigma_good, nthreads);
+    prepare_fit_planes(in, z, alb, opt.albedo_eps, opt.sigma_good, nthreads);
     return true;
 }
 

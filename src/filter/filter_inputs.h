@@ -93,6 +93,12 @@ struct FilterInputs {
     /// z of the fit points, one plane per channel, 0 at other pixels: what
     /// the fit reads, contiguous along a row and always finite.
     std::vector<float> zfit[3];
+    /// The radiance z (La + albedo_eps) of the fit points, one plane per
+    /// channel, 0 at other pixels: the range a window's radiance saw.
+    std::vector<float> lfit[3];
+    /// 1 / (La + albedo_eps) where a channel is demodulated, else 0: what
+    /// turns that range back into a bound on z at a receiver.
+    std::vector<float> inv_albedo[3];
 
     // Guides (empty when not given).
     std::vector<float> normal;    ///< unit normal, 3 per pixel; 0 = none

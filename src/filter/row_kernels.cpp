@@ -50,9 +50,11 @@ ZDENOISE_ROW_KERNEL void
 fit_row(const float* __restrict fit_weight, const float* __restrict spatial,
         const float* __restrict zl, const float* __restrict z0,
         const float* __restrict z1, const float* __restrict z2,
-        const float* __restrict vs, const float* __restrict sigma,
-        float* __restrict values, CellLanes* __restrict cell,
-        RangeLanes* __restrict range, const FitRow& in)
+        const float* __restrict l0, const float* __restrict l1,
+        const float* __restrict l2, const float* __restrict vs,
+        const float* __restrict sigma, float* __restrict values,
+        CellLanes* __restrict cell, RangeLanes* __restrict range,
+        const FitRow& in)
 {
     using S = CellLanes;
     const float dy = in.dy, ey = in.ey, mean = in.mean;
@@ -83,6 +85,7 @@ fit_row(const float* __restrict fit_weight, const float* __restrict spatial,
             c.lane[S::Wxy][l] += wx * dy;
             c.lane[S::Wyy][l] += wy * dy;
             const float zc[3] = { z0[q], z1[q], z2[q] };
+            const float lc[3] = { l0[q], l1[q], l2[q] };
 #pragma GCC unroll 3
             for (int ch = 0; ch < 3; ++ch) {
                 c.lane[S::Z0 + 3 * ch][l] += w * zc[ch];
@@ -92,6 +95,10 @@ fit_row(const float* __restrict fit_weight, const float* __restrict spatial,
                 float& hi = range->hi[ch][l];
                 lo = use && zc[ch] < lo ? zc[ch] : lo;
                 hi = use && zc[ch] > hi ? zc[ch] : hi;
+                float& llo = range->llo[ch][l];
+                float& lhi = range->lhi[ch][l];
+                llo = use && lc[ch] < llo ? lc[ch] : llo;
+                lhi = use && lc[ch] > lhi ? lc[ch] : lhi;
             }
             const float nx = w2v * dx, ny = w2v * dy;
             c.lane[S::N][l] += w2v;
@@ -118,10 +125,12 @@ namespace {
     const uint32_t *__restrict cls, const float *__restrict gw,                \
         const float *__restrict fitw, const float *__restrict values,          \
         const float *__restrict spat, const float *__restrict zl,              \
-        float *__restrict out_s, float *__restrict a0, float *__restrict a1,   \
-        float *__restrict a2
+        const float *__restrict ia0, const float *__restrict ia1,              \
+        const float *__restrict ia2, float *__restrict out_s,                  \
+        float *__restrict a0, float *__restrict a1, float *__restrict a2
 #define ZDENOISE_SPLAT_ARGS(in)                                                \
-    in.cls, in.g, in.fit_weight, in.values, in.spatial, in.zl, in.s, in.a[0], \
+    in.cls, in.g, in.fit_weight, in.values, in.spatial, in.zl,                 \
+        in.inv_albedo[0], in.inv_albedo[1], in.inv_albedo[2], in.s, in.a[0],   \
         in.a[1], in.a[2]
 
 template<bool kPower8>
@@ -129,9 +138,9 @@ template<bool kPower8>
 splat_lanes(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
 {
     float* const out_a[3] = { a0, a1, a2 };
+    const float* const inv_albedo[3] = { ia0, ia1, ia2 };
     const PlaneCoeffs P = in.whole, Q = in.quadrant;
-    const float lo[3] = { in.lo[0], in.lo[1], in.lo[2] };
-    const float hi[3] = { in.hi[0], in.hi[1], in.hi[2] };
+    const WindowRange range = in.range;
     const float ey = in.ey, inv_r = in.inv_r, v = in.v, dx0 = in.dx0;
     const float mean = in.mean, value_scale = in.value_scale;
     const int n = in.n;
@@ -176,8 +185,15 @@ splat_lanes(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
                 wm = opposite ? float(kMaxWm) : wm;
                 // Without a quadrant plane Q is the whole one: Zm = Z, wm = 1
                 // and A = (Z + Z) / 2 = Z exactly.
-                const float A = (Z + wm * Zm) / (1.0f + wm);
-                out_a[ch][q]  = s * std::min(std::max(A, lo[ch]), hi[ch]);
+                // Within the light the window saw, and then within its
+                // radiance at this pixel's albedo: a mixed pixel's z (an
+                // emitter's anti-aliased edge) is no one side's light.
+                const float A  = (Z + wm * Zm) / (1.0f + wm);
+                const float Az = std::min(std::max(A, range.lo[ch]), range.hi[ch]);
+                const float ia = inv_albedo[ch][q];
+                const float Al = std::min(std::max(Az, range.llo[ch] * ia),
+                                          range.lhi[ch] * ia);
+                out_a[ch][q] = s * Al;
             }
             out_s[q] = s;
         }
@@ -187,15 +203,15 @@ splat_lanes(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
 ZDENOISE_ROW_KERNEL void
 splat_row_power8(ZDENOISE_SPLAT_POINTERS, const SplatRow& in)
 {
-    splat_lanes<true>(cls, gw, fitw, values, spat, zl, out_s, a0, a1, a2, in,
-                      8.0f);
+    splat_lanes<true>(cls, gw, fitw, values, spat, zl, ia0, ia1, ia2, out_s, a0,
+                      a1, a2, in, 8.0f);
 }
 
 void
 splat_row(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
 {
-    splat_lanes<false>(cls, gw, fitw, values, spat, zl, out_s, a0, a1, a2, in,
-                       power);
+    splat_lanes<false>(cls, gw, fitw, values, spat, zl, ia0, ia1, ia2, out_s,
+                       a0, a1, a2, in, power);
 }
 
 }  // namespace
@@ -205,18 +221,19 @@ RangeLanes::clear()
 {
     for (int ch = 0; ch < 3; ++ch)
         for (int l = 0; l < kLanes; ++l) {
-            lo[ch][l] = std::numeric_limits<float>::infinity();
-            hi[ch][l] = -std::numeric_limits<float>::infinity();
+            lo[ch][l] = llo[ch][l] = std::numeric_limits<float>::infinity();
+            hi[ch][l] = lhi[ch][l] = -std::numeric_limits<float>::infinity();
         }
 }
 
 
-void
-RangeLanes::reduce(float lo_out[3], float hi_out[3]) const
+WindowRange::WindowRange(const RangeLanes& r)
 {
     for (int ch = 0; ch < 3; ++ch) {
-        lo_out[ch] = *std::min_element(lo[ch], lo[ch] + kLanes);
-        hi_out[ch] = *std::max_element(hi[ch], hi[ch] + kLanes);
+        lo[ch]  = *std::min_element(r.lo[ch], r.lo[ch] + kLanes);
+        hi[ch]  = *std::max_element(r.hi[ch], r.hi[ch] + kLanes);
+        llo[ch] = *std::min_element(r.llo[ch], r.llo[ch] + kLanes);
+        lhi[ch] = *std::max_element(r.lhi[ch], r.lhi[ch] + kLanes);
     }
 }
 

@@ -38,14 +38,21 @@ struct CellLanes {
     float lane[kSums][kLanes];
 };
 
-/// The range of z of a window's fit points (those of weight > 0), per channel,
-/// in kLanes partial minima and maxima: no fit of the window predicts light
-/// outside it (section 6).
+/// The range of z and of the radiance of a window's fit points (those of
+/// weight > 0), per channel, in kLanes partial minima and maxima: no fit of
+/// the window predicts light or radiance outside them (section 6).
 struct RangeLanes {
-    float lo[3][kLanes], hi[3][kLanes];
+    float lo[3][kLanes], hi[3][kLanes];    ///< z
+    float llo[3][kLanes], lhi[3][kLanes];  ///< radiance
     void clear();
-    /// The whole range: lo, hi per channel (lo > hi when no point).
-    void reduce(float lo_out[3], float hi_out[3]) const;
+};
+
+/// The whole ranges of a window, per channel (lo > hi when no point).
+struct WindowRange {
+    float lo[3], hi[3];    ///< z
+    float llo[3], lhi[3];  ///< radiance
+    explicit WindowRange(const RangeLanes& lanes);
+    WindowRange() = default;
 };
 
 /// One row segment of a window for the fit: pointers at its first point.
@@ -66,9 +73,11 @@ void
 fit_row(const float* __restrict fit_weight, const float* __restrict spatial,
         const float* __restrict zl, const float* __restrict z0,
         const float* __restrict z1, const float* __restrict z2,
-        const float* __restrict vs, const float* __restrict sigma,
-        float* __restrict values, CellLanes* __restrict cell,
-        RangeLanes* __restrict range, const FitRow& in);
+        const float* __restrict l0, const float* __restrict l1,
+        const float* __restrict l2, const float* __restrict vs,
+        const float* __restrict sigma, float* __restrict values,
+        CellLanes* __restrict cell, RangeLanes* __restrict range,
+        const FitRow& in);
 
 /// A solved plane's coefficients as floats, for the splat kernel.
 struct PlaneCoeffs {
@@ -88,7 +97,8 @@ struct SplatRow {
     float dx0, ey, inv_r, v;  ///< dx of the first point, e(dy), 1/R, dy/R
     float mean, value_scale;  ///< for exp(-vt) where the fit did not keep it
     PlaneCoeffs whole, quadrant;  ///< quadrant = whole where it has none
-    float lo[3], hi[3];  ///< the window's range of z: A is clamped to it
+    const float* inv_albedo[3];  ///< 1 / (La + eps) of the receivers
+    WindowRange range;           ///< A is clamped to it
     float* s;     ///< receives each point's weight (0: receives nothing)
     float* a[3];  ///< receives weight times the blended plane value A
 };

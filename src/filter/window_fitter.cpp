@@ -108,11 +108,12 @@ WindowFitter::fit(int R, int value_buffer)
             row.dx0        = float(seg[0] - m_x0);
             fit_row(&m_fit_weight[c], &m_spatial_row[size_t(seg[0] - m_x0 + R)],
                     &m_in.zl[i], &m_in.zfit[0][i], &m_in.zfit[1][i],
-                    &m_in.zfit[2][i], &m_in.vs[i], &m_in.sigma[i], values + c,
+                    &m_in.zfit[2][i], &m_in.lfit[0][i], &m_in.lfit[1][i],
+                    &m_in.lfit[2][i], &m_in.vs[i], &m_in.sigma[i], values + c,
                     &cells[seg[2]], &range, row);
         }
     }
-    range.reduce(wf.lo, wf.hi);
+    wf.range = WindowRange(range);
     FitMoments cell[9];
     double w2s2 = 0.0;
     for (int k = 0; k < 9; ++k)
@@ -180,10 +181,7 @@ WindowFitter::splat(const WindowFit& w)
     row.mean        = w.mean;
     row.value_scale = value_scale(w.mean);
     row.whole       = whole;
-    for (int ch = 0; ch < 3; ++ch) {
-        row.lo[ch] = w.lo[ch];
-        row.hi[ch] = w.hi[ch];
-    }
+    row.range       = w.range;
     row.s           = m_splat_s.data();
     for (int ch = 0; ch < 3; ++ch)
         row.a[ch] = m_splat_a[ch].data();
@@ -213,6 +211,8 @@ WindowFitter::splat(const WindowFit& w)
             row.fit_weight   = &m_fit_weight[c];
             row.values       = values + c;
             row.zl           = &m_in.zl[i];
+            for (int ch = 0; ch < 3; ++ch)
+                row.inv_albedo[ch] = &m_in.inv_albedo[ch][i];
             row.n            = x1 - x0 + 1;
             row.dx0          = float(x0 - m_x0);
             row.quadrant     = quadrant[half[2]];

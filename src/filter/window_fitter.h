@@ -25,7 +25,7 @@ struct WindowFit {
     double eta  = 0.0;   ///< predicted relative noise at the centre
     Plane whole;
     Plane quadrant[4];
-    float lo[3] = {}, hi[3] = {};  ///< range of z over the fit's points
+    WindowRange range;  ///< of z and radiance over the fit's points
 };
 
 enum class StopReason { Quality, Size, Edge };
