@@ -109,14 +109,15 @@ class Filter {
 public:
     Filter(const RefImage& z, const RefImage& La, const RefGuides& g,
            const FilterOptions& opt)
-        : z(z), La(La), g(g), opt(opt), w(z.w), h(z.h)
+        : z(z), z_in(z), La(La), g(g), opt(opt), w(z.w), h(z.h)
     {
     }
 
     RefImage run(RefStats* stats);
 
 private:
-    const RefImage& z;
+    RefImage z;               // the quotient the fits read (outliers capped)
+    const RefImage& z_in;     // as given: what passes through
     const RefImage& La;
     const RefGuides& g;
     const FilterOptions& opt;
@@ -125,6 +126,12 @@ private:
     // per-pixel facts
     std::vector<char> surface_, fitpt_, receiver_;  // receiver_: 3 per pixel
     std::vector<double> zl_, V_, Vs_, sigma_;
+    struct Outlier {
+        int x, y;
+        double excess[3];  // radiance
+    };
+    std::vector<Outlier> outliers_;  // section 3a, raster order
+    void split_outliers();
 
     size_t idx(int x, int y) const { return size_t(y) * w + x; }
 
@@ -331,7 +338,6 @@ private:
         int R = 0;
         double m = 0.0;  // mean zl over P_R
         Fit whole, quad[4];
-        double lo[3] = { INF, INF, INF }, hi[3] = { -INF, -INF, -INF };  // z over G_R
         double llo[3] = { INF, INF, INF }, lhi[3] = { -INF, -INF, -INF };  // radiance over G_R
         double eta  = INF;
         bool edge   = false;
@@ -444,6 +450,8 @@ Filter::compute_noise()
         V = from_image();
     }
     V_ = V;
+    if (opt.outlier_spread)
+        split_outliers();
 
     // 3x3 smoothing over fit points, and sigma
     Vs_.assign(size_t(w) * h, 0.0);
@@ -586,8 +594,6 @@ Filter::window(int x0, int y0, int R) const
         p.vs    = Vs(x, y);
         p.sigma = sigma(x, y);
         for (int c = 0; c < 3; ++c) {
-            W.lo[c] = std::min(W.lo[c], p.z[c]);
-            W.hi[c] = std::max(W.hi[c], p.z[c]);
             const double L = p.z[c] * (double(La.at(x, y, c)) + double(opt.albedo_eps));
             W.llo[c] = std::min(W.llo[c], L);
             W.lhi[c] = std::max(W.lhi[c], L);
@@ -636,6 +642,68 @@ Filter::window(int x0, int y0, int R) const
         }
     }
     return W;
+}
+
+// Section 3a: a fit point whose luminance exceeds both its 5x5 same-surface
+// neighbourhood's median by t standard deviations (sqrt of the median of V
+// there) and its brightest same-surface 3x3 neighbour is capped at the
+// larger of the two; t = Phi^-1(1 - 1 / (2 r_max + 1)^2). Decided on the
+// original values, then applied.
+void
+Filter::split_outliers()
+{
+    const double n = double(2 * opt.r_max + 1) * double(2 * opt.r_max + 1);
+    // Phi^-1(1 - 1/n) by Newton's method on the normal tail Q(t) = 1/n.
+    double t = 3.0;
+    for (int k = 0; k < 50; ++k) {
+        const double q   = 0.5 * std::erfc(t / std::sqrt(2.0));
+        const double pdf = std::exp(-0.5 * t * t) / std::sqrt(2.0 * M_PI);
+        t += (q - 1.0 / n) / pdf;
+    }
+    auto med = [](std::vector<double> v) {
+        std::sort(v.begin(), v.end());
+        const size_t k = v.size();
+        return (k % 2) ? v[k / 2] : 0.5 * (v[k / 2 - 1] + v[k / 2]);
+    };
+    std::vector<double> cap(size_t(w) * h, 0.0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            if (!fitpt(x, y))
+                continue;
+            std::vector<double> level, var;
+            double neighbour = -INF;
+            for (int dy = -2; dy <= 2; ++dy)
+                for (int dx = -2; dx <= 2; ++dx) {
+                    const int xn = x + dx, yn = y + dy;
+                    if (!z.inside(xn, yn) || !fitpt(xn, yn)
+                        || !same_surface_for_noise(x, y, xn, yn))
+                        continue;
+                    level.push_back(zl(xn, yn));
+                    if (!std::isnan(V_[idx(xn, yn)]))
+                        var.push_back(V_[idx(xn, yn)]);
+                    if ((dx || dy) && std::abs(dx) <= 1 && std::abs(dy) <= 1)
+                        neighbour = std::max(neighbour, zl(xn, yn));
+                }
+            if (var.empty())
+                continue;
+            const double top = std::max(med(level) + t * std::sqrt(med(var)), neighbour);
+            if (zl(x, y) > top && top > 0.0)
+                cap[idx(x, y)] = top;
+        }
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            if (!(cap[idx(x, y)] > 0.0))
+                continue;
+            const double keep = cap[idx(x, y)] / zl(x, y);
+            Outlier o { x, y, { 0, 0, 0 } };
+            for (int c = 0; c < 3; ++c) {
+                const double zc = z.at(x, y, c);
+                o.excess[c] = zc * (1.0 - keep) * (double(La.at(x, y, c)) + double(opt.albedo_eps));
+                z.at(x, y, c) = float(zc * keep);
+            }
+            zl_[idx(x, y)] = cap[idx(x, y)];
+            outliers_.push_back(o);
+        }
 }
 
 RefImage
@@ -750,9 +818,8 @@ Filter::run(RefStats* stats)
                         }
                         A = (Z + wm * Zm) / (1.0 + wm);
                     }
-                    // within the range of z over the window's good points,
-                    // then within their radiance at this pixel's albedo
-                    A = std::min(std::max(A, fin.lo[c]), fin.hi[c]);
+                    // within the radiance of the window's good points, at
+                    // this pixel's albedo
                     if (receiver_[idx(xq, yq) * 3 + c]) {
                         const double a = double(La.at(xq, yq, c)) + double(opt.albedo_eps);
                         A = std::min(std::max(A, fin.llo[c] / a), fin.lhi[c] / a);
@@ -802,18 +869,45 @@ Filter::run(RefStats* stats)
             }
     }
 
+    // ---- section 3a: the outliers' excess, spread ----
+    std::vector<double> spread(size_t(w) * h * 3, 0.0);
+    for (const Outlier& o : outliers_) {
+        const int R = opt.r_max;
+        double norm[3] = { 0, 0, 0 };
+        auto weight = [&](int xq, int yq) {
+            if (!surface(xq, yq))
+                return 0.0;
+            const int dx = xq - o.x, dy = yq - o.y;
+            return guide_weight(xq, yq, o.x, o.y)
+                   * std::exp(-double(dx * dx + dy * dy) / (double(R) * R));
+        };
+        for (int yq = std::max(o.y - R, 0); yq <= std::min(o.y + R, h - 1); ++yq)
+            for (int xq = std::max(o.x - R, 0); xq <= std::min(o.x + R, w - 1); ++xq)
+                for (int c = 0; c < 3; ++c)
+                    if (receiver(xq, yq, c))
+                        norm[c] += weight(xq, yq)
+                                   * (double(La.at(xq, yq, c)) + double(opt.albedo_eps));
+        for (int yq = std::max(o.y - R, 0); yq <= std::min(o.y + R, h - 1); ++yq)
+            for (int xq = std::max(o.x - R, 0); xq <= std::min(o.x + R, w - 1); ++xq)
+                for (int c = 0; c < 3; ++c)
+                    if (receiver(xq, yq, c) && norm[c] > 0.0)
+                        spread[idx(xq, yq) * 3 + c]
+                            += o.excess[c] * weight(xq, yq) / norm[c];
+    }
+
     // ---- section 7: output ----
-    RefImage out = z;
+    RefImage out = z_in;
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             bool passthrough = false;
             for (int c = 0; c < 3; ++c) {
                 double ws = wsum[idx(x, y)];
                 if (receiver(x, y, c) && ws > 0.0) {
-                    out.at(x, y, c) = float(acc[idx(x, y) * 3 + c] / ws);
+                    out.at(x, y, c) = float(acc[idx(x, y) * 3 + c] / ws
+                                            + spread[idx(x, y) * 3 + c]);
                 } else {
                     passthrough = true;
-                    float zc    = z.at(x, y, c);
+                    float zc    = z_in.at(x, y, c);
                     out.at(x, y, c) = std::isfinite(zc) ? zc : 0.0f;
                 }
             }

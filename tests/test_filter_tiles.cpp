@@ -111,7 +111,7 @@ TEST(FilterTiles, StripsGivenTheFrameEqualTheWholeFrame)
         ASSERT_FALSE(whole.has_error()) << whole.geterror();
 
         const int halo = zdenoise::filter_halo(opt);
-        EXPECT_EQ(halo, 2 * opt.r_max + 4 + stride - 1);
+        EXPECT_EQ(halo, 2 * opt.r_max + 6 + stride - 1);
         opt.frame = noisy.roi();
         int64_t windows = 0;
         const ROI f = noisy.roi();

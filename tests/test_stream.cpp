@@ -227,7 +227,7 @@ TEST_F(StreamTest, StripsWriteTheWholeFrameFileAt1080p)
     RunResult strips = run("--in " + path("frame.exr") + " -o " + path("strips.exr")
                            + " --tile 96 -v");
     ASSERT_EQ(strips.status, 0) << strips.err;
-    EXPECT_NE(strips.out.find("12 strips of 96 rows, each read with 38 rows of halo"),
+    EXPECT_NE(strips.out.find("12 strips of 96 rows, each read with 40 rows of halo"),
               std::string::npos)
         << strips.out;
     expect_same_file(path("whole.exr"), path("strips.exr"));
@@ -252,7 +252,7 @@ TEST_F(StreamTest, StripsOfTiledFilesOffsetWindowsAndLayersAreExact)
     FrameOptions big { 190, 160, 0.05f, 0, 0, -20 };
     big.passes = false;
     write_frame(path("guides.exr"), big);
-    // Rows read around a strip: the filter's halo, 2 * 6 + 4 + 2 (the
+    // Rows read around a strip: the filter's halo, 2 * 6 + 6 + 2 (the
     // default stride 3 reaches 2 further), and in layers mode also the
     // reach of the residual layer's mask, r_max.
     struct Case {
@@ -261,9 +261,9 @@ TEST_F(StreamTest, StripsOfTiledFilesOffsetWindowsAndLayersAreExact)
         const char* tile;
         const char* around;
     } cases[] = {
-        { "beauty", "", "1", "18" },
-        { "layers", " --mode layers --aovs -d float", "23", "24" },
-        { "guide file", " --normal:ch=\"Denoising Normal\" " + path("guides.exr"), "50", "18" },
+        { "beauty", "", "1", "20" },
+        { "layers", " --mode layers --aovs -d float", "23", "26" },
+        { "guide file", " --normal:ch=\"Denoising Normal\" " + path("guides.exr"), "50", "20" },
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.name);

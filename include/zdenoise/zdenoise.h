@@ -92,6 +92,13 @@ struct FilterOptions {
     /// keeps every window); 0 = the lattice only (2x faster again, up to
     /// 27 % worse relMSE: a preview setting).
     int stride_edges = 1;
+    /// 1 = outliers (fireflies: a point above its neighbourhood's median by
+    /// more than its noise allows, docs/FILTER.md section 3a) keep only the
+    /// light their neighbourhood allows in the fit, and the rest of their
+    /// radiance is spread over their surface around them, so that the
+    /// image keeps its energy; 0 = off (the method's: the value term alone
+    /// down-weights them, and their energy is lost).
+    int outlier_spread = 1;
     /// The radius tried after R: max(R + 1, floor(R * radius_growth)), up
     /// to r_max; an edge steps back to the radius tried before. 1 is
     /// the method's R + 1; the default 2 (radii 2, 4, 8, 16) is about
@@ -127,6 +134,7 @@ struct FilterOptions {
         o.sigma_good = 1.0f;
         o.radius_growth = 1.0f;
         o.centre_stride = 1;
+        o.outlier_spread = 0;
         return o;
     }
 };

@@ -10,6 +10,7 @@
 
 #include "guide_weight.h"
 #include "noise_estimate.h"
+#include "outliers.h"
 
 namespace zdenoise {
 namespace detail {
@@ -82,7 +83,7 @@ decode_filter_inputs(FilterInputs& in, ImageBuf& dst, const ImageBuf& quotient,
     in.height = region.height();
 
     // The RGB quotient, 3 per pixel: kept as zfit for the fit points.
-    const std::vector<float> z = read_channels(quotient, region, 0, 3);
+    std::vector<float> z = read_channels(quotient, region, 0, 3);
     const std::vector<float> alb = read_channels(albedo, region, 0, 3);
     std::vector<float> alpha;
     const int alpha_ch = quotient.spec().alpha_channel;
@@ -97,7 +98,11 @@ decode_filter_inputs(FilterInputs& in, ImageBuf& dst, const ImageBuf& quotient,
     if (guides.object_id && !decode_object_ids(in, dst, *guides.object_id))
         return false;
     classify_pixels(in, z, alb, alpha, depth, opt.albedo_eps, nthreads);
-    estimate_noise(in, guides, alb, opt.albedo_eps, nthreads);
+    const RawVariance var = raw_variance(in, guides, alb, opt.albedo_eps,
+                                         nthreads);
+    if (opt.outlier_spread)
+        in.outliers = split_outliers(in, z, alb, var, opt, nthreads);
+    smooth_noise(in, var, nthreads);
     prepare_fit_planes(in, z, alb, opt.albedo_eps, opt.sigma_good, nthreads);
     return true;
 }

@@ -6,8 +6,9 @@
 // float arrays over a region (the output ROI plus the filter's halo), and
 // the stages that decode them (docs/FILTER.md sections 2-4):
 // decode_filter_inputs() runs classify_pixels() (pixel_classes.cpp),
-// decode_normals() and decode_object_ids() (guide_weight.cpp) and
-// estimate_noise() (noise_estimate.cpp).
+// decode_normals() and decode_object_ids() (guide_weight.cpp),
+// raw_variance() (noise_estimate.cpp), split_outliers() (outliers.cpp) and
+// smooth_noise() (noise_estimate.cpp).
 
 #pragma once
 
@@ -75,6 +76,13 @@ constexpr int kLanes = 8;
 /// row segment's end, and masks what lies beyond it.
 constexpr size_t kPlanePadding = 16;
 
+/// An outlier split off the quotient (docs/FILTER.md section 3a): where it
+/// is and the radiance taken out of it, per channel.
+struct Outlier {
+    int x = 0, y = 0;
+    float excess[3] = {};  ///< z (La + albedo_eps): radiance
+};
+
 /// The decoded filter input over `region` (row-major, `width` pixels a row).
 struct FilterInputs {
     ROI region;          ///< pixels held (within the image's data window)
@@ -99,6 +107,8 @@ struct FilterInputs {
     /// 1 / (La + albedo_eps) where a channel is demodulated, else 0: what
     /// turns that range back into a bound on z at a receiver.
     std::vector<float> inv_albedo[3];
+    /// The outliers split off z (section 3a), in raster order.
+    std::vector<Outlier> outliers;
 
     // Guides (empty when not given).
     std::vector<float> normal;    ///< unit normal, 3 per pixel; 0 = none

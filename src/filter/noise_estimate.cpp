@@ -45,44 +45,6 @@ quotient_variance(const std::vector<float>& albedo, float eps_a, size_t i,
     return (std::isfinite(v) && v >= 0.0f) ? v : kUndefined;
 }
 
-/// Are two pixels on the same surface for the noise estimate: same (plain
-/// or primary Cryptomatte) id, and close normals when normals are given.
-bool
-same_surface(const FilterInputs& in, size_t a, size_t b)
-{
-    if (!in.normal.empty()) {
-        const float* na = &in.normal[3 * a];
-        const float* nb = &in.normal[3 * b];
-        const bool za = no_normal(na), zb = no_normal(nb);
-        if (za != zb)
-            return false;
-        if (!za && na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2] <= 0.9f)
-            return false;
-    }
-    if (in.id_pairs == -1)
-        return same_id(in.ids[a], in.ids[b]);
-    if (in.id_pairs > 0) {
-        // Primary id: the rank of largest coverage (the first of equals).
-        auto primary = [&](size_t i, float& id) {
-            const float* p = &in.ids[size_t(2 * in.id_pairs) * i];
-            float best     = 0.0f;
-            bool any       = false;
-            for (int k = 0; k < in.id_pairs; ++k)
-                if (p[2 * k + 1] > best) {
-                    best = p[2 * k + 1];
-                    id   = p[2 * k];
-                    any  = true;
-                }
-            return any;
-        };
-        float ida = 0, idb = 0;
-        const bool ha = primary(a, ida), hb = primary(b, idb);
-        if (ha != hb || (ha && !same_id(ida, idb)))
-            return false;
-    }
-    return true;
-}
-
 /// The robust local variance of section 3: at each fit point, the median
 /// of the squared residuals `e` (each an unbiased one-sample estimate of V,
 /// NaN where undefined) over its 5x5, divided by the median of chi-square
@@ -124,6 +86,45 @@ robust_variance(const FilterInputs& in, const RawVariance& e, int nthreads)
 }
 
 }  // namespace
+
+
+/// Are two pixels on the same surface for the noise estimate: same (plain
+/// or primary Cryptomatte) id, and close normals when normals are given.
+bool
+same_surface(const FilterInputs& in, size_t a, size_t b)
+{
+    if (!in.normal.empty()) {
+        const float* na = &in.normal[3 * a];
+        const float* nb = &in.normal[3 * b];
+        const bool za = no_normal(na), zb = no_normal(nb);
+        if (za != zb)
+            return false;
+        if (!za && na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2] <= 0.9f)
+            return false;
+    }
+    if (in.id_pairs == -1)
+        return same_id(in.ids[a], in.ids[b]);
+    if (in.id_pairs > 0) {
+        // Primary id: the rank of largest coverage (the first of equals).
+        auto primary = [&](size_t i, float& id) {
+            const float* p = &in.ids[size_t(2 * in.id_pairs) * i];
+            float best     = 0.0f;
+            bool any       = false;
+            for (int k = 0; k < in.id_pairs; ++k)
+                if (p[2 * k + 1] > best) {
+                    best = p[2 * k + 1];
+                    id   = p[2 * k];
+                    any  = true;
+                }
+            return any;
+        };
+        float ida = 0, idb = 0;
+        const bool ha = primary(a, ida), hb = primary(b, idb);
+        if (ha != hb || (ha && !same_id(ida, idb)))
+            return false;
+    }
+    return true;
+}
 
 
 RawVariance
@@ -241,25 +242,23 @@ smooth_noise(FilterInputs& in, const RawVariance& var, int nthreads)
 }
 
 
-void
-estimate_noise(FilterInputs& in, const Guides& guides,
-               const std::vector<float>& albedo, float albedo_eps,
-               int nthreads)
+RawVariance
+raw_variance(const FilterInputs& in, const Guides& guides,
+             const std::vector<float>& albedo, float albedo_eps, int nthreads)
 {
-    RawVariance var;
     if (guides.variance)
-        var = variance_from_guide(in, *guides.variance, albedo, albedo_eps);
-    else if (guides.half_a && guides.half_b) {
-        var = variance_from_halves(in, *guides.half_a, *guides.half_b, albedo,
-                                   albedo_eps, nthreads);
+        return variance_from_guide(in, *guides.variance, albedo, albedo_eps);
+    if (guides.half_a && guides.half_b) {
+        RawVariance var = variance_from_halves(in, *guides.half_a,
+                                               *guides.half_b, albedo,
+                                               albedo_eps, nthreads);
         const RawVariance own = variance_from_image(in, nthreads);
         for (size_t i = 0; i < var.size(); ++i)
             if (own[i] > var[i] || std::isnan(var[i]))
                 var[i] = own[i];
+        return var;
     }
-    else
-        var = variance_from_image(in, nthreads);
-    smooth_noise(in, var, nthreads);
+    return variance_from_image(in, nthreads);
 }
 
 }  // namespace detail

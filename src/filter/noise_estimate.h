@@ -41,11 +41,17 @@ variance_from_image(const FilterInputs& in, int nthreads);
 void
 smooth_noise(FilterInputs& in, const RawVariance& var, int nthreads);
 
-/// Section 3: V from the first source `guides` has, then smoothed.
-void
-estimate_noise(FilterInputs& in, const Guides& guides,
-               const std::vector<float>& albedo, float albedo_eps,
-               int nthreads);
+/// Section 3: V from the first source `guides` has (with halves, never
+/// below the image's own estimate).
+RawVariance
+raw_variance(const FilterInputs& in, const Guides& guides,
+             const std::vector<float>& albedo, float albedo_eps, int nthreads);
+
+/// Are pixels a and b on the same surface for the noise estimate: the same
+/// (plain or primary Cryptomatte) id, and close normals (cosine > 0.9) when
+/// normals are given.
+bool
+same_surface(const FilterInputs& in, size_t a, size_t b);
 
 }  // namespace detail
 }  // namespace zdenoise

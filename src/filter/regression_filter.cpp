@@ -22,6 +22,7 @@
 #include "centre_blocks.h"
 #include "filter_inputs.h"
 #include "internal.h"
+#include "outliers.h"
 #include "window_fitter.h"
 
 namespace zdenoise {
@@ -70,6 +71,8 @@ check_options(ImageBuf& dst, const FilterOptions& o)
                    "needs 1 <= centre_stride <= 64");
     if (o.stride_edges != 0 && o.stride_edges != 1)
         return bad("stride_edges", o.stride_edges, "needs 0 or 1");
+    if (o.outlier_spread != 0 && o.outlier_spread != 1)
+        return bad("outlier_spread", o.outlier_spread, "needs 0 or 1");
     if (!finite_nonneg(o.quadrant_power))
         return bad("quadrant_power", o.quadrant_power,
                    "needs a finite number >= 0");
@@ -81,7 +84,11 @@ check_options(ImageBuf& dst, const FilterOptions& o)
 /// sum s (section 6).
 struct Splats {
     std::vector<double> acc, wsum;
-    explicit Splats(size_t npix) : acc(3 * npix, 0.0), wsum(npix, 0.0) {}
+    std::vector<double> spread;  ///< outliers' spread light, z (section 3a)
+    explicit Splats(size_t npix)
+        : acc(3 * npix, 0.0), wsum(npix, 0.0), spread(3 * npix, 0.0)
+    {
+    }
 };
 
 /// Fit and splat every centre the output pixels `roi` depend on (sections
@@ -149,7 +156,8 @@ normalise_output(ImageBuf& dst, const ImageBuf& quotient,
             for (int ch = 0; ch < 3; ++ch) {
                 float& v = out[o * nch + ch];
                 if ((cl & (kReceiveR << ch)) && splats.wsum[o] > 0.0) {
-                    v = float(splats.acc[3 * o + ch] / splats.wsum[o]);
+                    v = float(splats.acc[3 * o + ch] / splats.wsum[o]
+                              + splats.spread[3 * o + ch]);
                 } else {
                     passed = true;
                     if (!std::isfinite(v))
@@ -188,6 +196,7 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
         return false;
     Splats splats(size_t(roi.width()) * size_t(roi.height()));
     FilterStats tile = fit_centres(in, opt, roi, nthreads, splats);
+    spread_outliers(in, opt, roi, splats.spread, nthreads);
     if (!normalise_output(dst, quotient, in, splats, roi, nthreads, tile))
         return false;
     totals.merge(tile);
@@ -201,11 +210,12 @@ int
 filter_halo(const FilterOptions& options)
 {
     // Everything an output pixel depends on lies within 2*r_max (centres up
-    // to r_max away, their windows r_max further) plus the noise estimate's
-    // footprint (3x3 residual, 5x5 median, 3x3 smoothing) of 4. With a
-    // stride, the lattice points deciding a centre lie up to stride - 1
-    // further.
-    return 2 * std::max(options.r_max, 0) + 4
+    // to r_max away, their windows r_max further) plus the footprint of the
+    // noise estimate and the outlier test: the smoothing's 3x3 (1) of the
+    // outlier test's 5x5 (2) of the raw variance (3x3 residual, 5x5
+    // median: 3), 6 in all. With a stride, the lattice points deciding a
+    // centre lie up to stride - 1 further.
+    return 2 * std::max(options.r_max, 0) + 6
            + effective_stride(options) - 1;
 }
 

@@ -91,10 +91,6 @@ fit_row(const float* __restrict fit_weight, const float* __restrict spatial,
                 c.lane[S::Z0 + 3 * ch][l] += w * zc[ch];
                 c.lane[S::Z0x + 3 * ch][l] += wx * zc[ch];
                 c.lane[S::Z0y + 3 * ch][l] += wy * zc[ch];
-                float& lo = range->lo[ch][l];
-                float& hi = range->hi[ch][l];
-                lo = use && zc[ch] < lo ? zc[ch] : lo;
-                hi = use && zc[ch] > hi ? zc[ch] : hi;
                 float& llo = range->llo[ch][l];
                 float& lhi = range->lhi[ch][l];
                 llo = use && lc[ch] < llo ? lc[ch] : llo;
@@ -185,13 +181,12 @@ splat_lanes(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
                 wm = opposite ? float(kMaxWm) : wm;
                 // Without a quadrant plane Q is the whole one: Zm = Z, wm = 1
                 // and A = (Z + Z) / 2 = Z exactly.
-                // Within the light the window saw, and then within its
-                // radiance at this pixel's albedo: a mixed pixel's z (an
+                // Within the radiance the window saw, at this pixel's
+                // albedo: a plane extrapolates, and a mixed pixel's z (an
                 // emitter's anti-aliased edge) is no one side's light.
                 const float A  = (Z + wm * Zm) / (1.0f + wm);
-                const float Az = std::min(std::max(A, range.lo[ch]), range.hi[ch]);
                 const float ia = inv_albedo[ch][q];
-                const float Al = std::min(std::max(Az, range.llo[ch] * ia),
+                const float Al = std::min(std::max(A, range.llo[ch] * ia),
                                           range.lhi[ch] * ia);
                 out_a[ch][q] = s * Al;
             }
@@ -221,8 +216,8 @@ RangeLanes::clear()
 {
     for (int ch = 0; ch < 3; ++ch)
         for (int l = 0; l < kLanes; ++l) {
-            lo[ch][l] = llo[ch][l] = std::numeric_limits<float>::infinity();
-            hi[ch][l] = lhi[ch][l] = -std::numeric_limits<float>::infinity();
+            llo[ch][l] = std::numeric_limits<float>::infinity();
+            lhi[ch][l] = -std::numeric_limits<float>::infinity();
         }
 }
 
@@ -230,8 +225,6 @@ RangeLanes::clear()
 WindowRange::WindowRange(const RangeLanes& r)
 {
     for (int ch = 0; ch < 3; ++ch) {
-        lo[ch]  = *std::min_element(r.lo[ch], r.lo[ch] + kLanes);
-        hi[ch]  = *std::max_element(r.hi[ch], r.hi[ch] + kLanes);
         llo[ch] = *std::min_element(r.llo[ch], r.llo[ch] + kLanes);
         lhi[ch] = *std::max_element(r.lhi[ch], r.lhi[ch] + kLanes);
     }

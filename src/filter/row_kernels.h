@@ -38,19 +38,17 @@ struct CellLanes {
     float lane[kSums][kLanes];
 };
 
-/// The range of z and of the radiance of a window's fit points (those of
-/// weight > 0), per channel, in kLanes partial minima and maxima: no fit of
-/// the window predicts light or radiance outside them (section 6).
+/// The range of the radiance of a window's fit points (those of weight >
+/// 0), per channel, in kLanes partial minima and maxima: no fit of the
+/// window predicts radiance outside it (section 6).
 struct RangeLanes {
-    float lo[3][kLanes], hi[3][kLanes];    ///< z
-    float llo[3][kLanes], lhi[3][kLanes];  ///< radiance
+    float llo[3][kLanes], lhi[3][kLanes];
     void clear();
 };
 
-/// The whole ranges of a window, per channel (lo > hi when no point).
+/// The whole range of a window, per channel (llo > lhi when no point).
 struct WindowRange {
-    float lo[3], hi[3];    ///< z
-    float llo[3], lhi[3];  ///< radiance
+    float llo[3], lhi[3];
     explicit WindowRange(const RangeLanes& lanes);
     WindowRange() = default;
 };

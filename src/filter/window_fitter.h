@@ -25,7 +25,7 @@ struct WindowFit {
     double eta  = 0.0;   ///< predicted relative noise at the centre
     Plane whole;
     Plane quadrant[4];
-    WindowRange range;  ///< of z and radiance over the fit's points
+    WindowRange range;  ///< of the radiance of the fit's points
 };
 
 enum class StopReason { Quality, Size, Edge };

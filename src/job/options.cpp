@@ -247,6 +247,10 @@ options()
         parameter({ Kind::Whole, "--stride-edges", "stride-edges", FIELD(job.filter.stride_edges), "0|1",
           "0: the lattice only, also at edges (preview: 2x\n"
           "faster again, up to 27% worse relMSE) (1)" }),
+        parameter({ Kind::Whole, "--outlier-spread", "outlier-spread", FIELD(job.filter.outlier_spread), "0|1",
+          "1: fireflies keep the light around them in the fit\n"
+          "and their excess is spread over their surface,\n"
+          "keeping the energy; 0: the value term alone (1)" }),
         parameter({ Kind::Real, "--radius-growth", "radius-growth", FIELD(job.filter.radius_growth), "X",
           "Radius tried after R: max(R+1, R*X) (2: radii 2, 4, 8,\n"
           "16; 1 = the method's R+1, as --preset spec)" }),
