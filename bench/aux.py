@@ -34,7 +34,8 @@ DATA = os.path.join(os.path.dirname(REPO), "shared", "data")
 SCENES = ["cornell_textured", "newspaper", "zigzag_steps"]
 
 
-def combined(path):
+def channels(path, layer=None):
+    """R,G,B of a file (plain R,G,B, else <layer>.Combined), or of `layer`'s R,G,B."""
     # ImageInput, not ImageBuf: OIIO's ImageCache would serve an output
     # rewritten under the same name from its stale entry.
     inp = oiio.ImageInput.open(path)
@@ -42,12 +43,13 @@ def combined(path):
         sys.exit(f"cannot read '{path}': {oiio.geterror()}")
     spec = inp.spec()
     names = list(spec.channelnames)
-    if all(c in names for c in "RGB"):
+    if layer is None and all(c in names for c in "RGB"):
         idx = [names.index(c) for c in "RGB"]
     else:
-        hits = [n for n in names if n.endswith(".Combined.R")]
+        want = layer or "Combined"
+        hits = [n for n in names if n.endswith("." + want + ".R")]
         if len(hits) != 1:
-            sys.exit(f"aux.py: no Combined RGB in '{path}'")
+            sys.exit(f"no {want} RGB in '{path}'")
         idx = [names.index(hits[0][:-1] + c) for c in "RGB"]
     px = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
     inp.close()
@@ -87,10 +89,10 @@ def main():
             r = subprocess.run(cmd + extra, env=env, capture_output=True, text=True)
             if r.returncode:
                 sys.exit(f"aux.py: {' '.join(cmd + extra)}: {r.stderr.strip()}")
-            return combined(out)
+            return channels(out)
 
         for scene in a.scenes:
-            ref = combined(os.path.join(a.data, scene, f"{scene}_ref.exr"))
+            ref = channels(os.path.join(a.data, scene, f"{scene}_ref.exr"))
             for spp in a.spp.split(","):
                 for seed in a.seeds.split(","):
                     noisy = os.path.join(a.data, scene, f"{scene}_spp{spp}_s{seed}.exr")

@@ -25,40 +25,11 @@ import subprocess
 import sys
 import tempfile
 
-import numpy as np
-import OpenImageIO as oiio
-
 HERE = os.path.dirname(os.path.abspath(__file__))
-REPO = os.path.dirname(HERE)
-DATA = os.path.join(os.path.dirname(REPO), "shared", "data")
-SCENES = ["cornell_textured", "newspaper", "zigzag_steps"]
+sys.path.insert(0, HERE)
+from aux import DATA, REPO, SCENES, channels, relmse  # noqa: E402
+
 SCRIPT = os.path.join(REPO, "share", "blender", "zdenoise_aux.py")
-
-
-def channels(path, layer):
-    # ImageInput, not ImageBuf: OIIO's ImageCache would serve an output
-    # rewritten under the same name from its stale entry.
-    inp = oiio.ImageInput.open(path)
-    if inp is None:
-        sys.exit(f"cannot read '{path}': {oiio.geterror()}")
-    spec = inp.spec()
-    names = list(spec.channelnames)
-    if layer is None and all(c in names for c in "RGB"):
-        idx = [names.index(c) for c in "RGB"]
-    else:
-        want = layer or "Combined"
-        hits = [n for n in names if n.endswith("." + want + ".R")]
-        if len(hits) != 1:
-            sys.exit(f"aux_render.py: no {want} RGB in '{path}'")
-        idx = [names.index(hits[0][:-1] + c) for c in "RGB"]
-    px = inp.read_image(0, 0, 0, spec.nchannels, oiio.FLOAT)
-    inp.close()
-    px = px.reshape(spec.height, spec.width, spec.nchannels)
-    return np.nan_to_num(px[:, :, idx].astype(np.float64))
-
-
-def relmse(img, ref):
-    return float(np.mean((img - ref) ** 2 / (ref ** 2 + 1e-2)))
 
 
 def main():

@@ -19,7 +19,7 @@ by name with no flags. The .blend is not changed (nothing is saved).
 
 Options (after Blender's `--`):
   -o, --output FILE   the EXR to write (required)
-  --samples N         samples per pixel (default 16)
+  --samples N         samples per pixel (default 24: docs/AUX.md)
   --frame F           the frame to render (default: the scene's current frame)
   --percent P         resolution percentage (default: the scene's)
   --threads T         render threads (default: the scene's setting)
@@ -31,7 +31,7 @@ import time
 
 import bpy
 
-DEFAULT_SAMPLES = 16
+DEFAULT_SAMPLES = 24
 
 
 def parse_args():
