@@ -9,10 +9,15 @@
 
 namespace zdenoise {
 
+namespace {
+
+/// Both forms of denoise(): remodulated by `remodulation` when given, else
+/// by `albedo`.
 bool
-denoise(ImageBuf& dst, const ImageBuf& radiance, const ImageBuf& albedo,
-        const Guides& guides, const FilterOptions& options, FilterStats* stats,
-        ROI roi, int nthreads)
+denoise_(ImageBuf& dst, const ImageBuf& radiance, const ImageBuf& albedo,
+         const ImageBuf* remodulation, const Guides& guides,
+         const FilterOptions& options, FilterStats* stats, ROI roi,
+         int nthreads)
 {
     const char* opname = "denoise";
     if (!detail::prepare_dst(dst, radiance, roi, opname)
@@ -44,10 +49,38 @@ denoise(ImageBuf& dst, const ImageBuf& radiance, const ImageBuf& albedo,
         dst.errorfmt("{}", filtered.geterror());
         return false;
     }
-    if (!remodulate(dst, filtered, albedo, options.albedo_eps, roi,
-                    nthreads))
-        return false;
-    return true;
+    if (remodulation) {
+        if (!detail::check_input(dst, *remodulation, opname,
+                                 "remodulation albedo", roi, 3))
+            return false;
+        return remodulate(dst, filtered, albedo, *remodulation,
+                          options.albedo_eps, roi, nthreads);
+    }
+    return remodulate(dst, filtered, albedo, options.albedo_eps, roi,
+                      nthreads);
+}
+
+}  // namespace
+
+
+bool
+denoise(ImageBuf& dst, const ImageBuf& radiance, const ImageBuf& albedo,
+        const Guides& guides, const FilterOptions& options, FilterStats* stats,
+        ROI roi, int nthreads)
+{
+    return denoise_(dst, radiance, albedo, nullptr, guides, options, stats,
+                    roi, nthreads);
+}
+
+
+bool
+denoise(ImageBuf& dst, const ImageBuf& radiance, const ImageBuf& albedo,
+        const ImageBuf* remodulation_albedo, const Guides& guides,
+        const FilterOptions& options, FilterStats* stats, ROI roi,
+        int nthreads)
+{
+    return denoise_(dst, radiance, albedo, remodulation_albedo, guides,
+                    options, stats, roi, nthreads);
 }
 
 
@@ -58,6 +91,19 @@ denoise(const ImageBuf& radiance, const ImageBuf& albedo, const Guides& guides,
 {
     return detail::returned_image("denoise", [&](ImageBuf& result) {
         return denoise(result, radiance, albedo, guides, options, stats, roi, nthreads);
+    });
+}
+
+
+ImageBuf
+denoise(const ImageBuf& radiance, const ImageBuf& albedo,
+        const ImageBuf* remodulation_albedo, const Guides& guides,
+        const FilterOptions& options, FilterStats* stats, ROI roi,
+        int nthreads)
+{
+    return detail::returned_image("denoise", [&](ImageBuf& result) {
+        return denoise(result, radiance, albedo, remodulation_albedo, guides,
+                       options, stats, roi, nthreads);
     });
 }
 

@@ -77,5 +77,15 @@ returned_image(const char* opname, Op&& op)
 bool
 prepare_dst(ImageBuf& dst, const ImageBuf& src, ROI& roi, const char* opname);
 
+/// The albedo that remodulates a quotient demodulated by `albedo` when a
+/// cleaner `remodulation_albedo` is given (zdenoise.h's remodulate() with
+/// two albedos), over roi into `dst` (float, R,G,B): the clean one where
+/// both are demodulated (albedo_demodulated()), else the demodulating one,
+/// so that channels not demodulated still pass through.
+bool
+remodulation_albedo(ImageBuf& dst, const ImageBuf& albedo,
+                    const ImageBuf& remodulation_albedo, float albedo_eps,
+                    ROI roi);
+
 }  // namespace detail
 }  // namespace zdenoise

@@ -66,8 +66,9 @@ denoise_layer(ImageBuf& dst, const Layer& layer, const Guides& shared,
             contribution = layer.radiance;
             return true;
         }
-        ok = denoise(out, *layer.radiance, *layer.albedo, guides, options,
-                     stats, roi, nthreads)
+        ok = denoise(out, *layer.radiance, *layer.albedo,
+                     layer.remodulation_albedo, guides, options, stats, roi,
+                     nthreads)
              && clamp_negative(out, roi, nthreads);
     } else {
         // Already the quotient: filter it as it is, then compose it as the
@@ -84,7 +85,20 @@ denoise_layer(ImageBuf& dst, const Layer& layer, const Guides& shared,
             }
             quotient = &filtered;
         }
-        ok = ImageBufAlgo::mul(out, *quotient, *layer.albedo, roi, nthreads)
+        // A remodulation albedo replaces the colour where both are usable.
+        ImageBuf effective;
+        const ImageBuf* colour = layer.albedo;
+        if (layer.remodulation_albedo) {
+            if (!detail::remodulation_albedo(effective, *layer.albedo,
+                                             *layer.remodulation_albedo,
+                                             options.albedo_eps, roi)) {
+                dst.errorfmt("layered_denoise: layer '{}': {}", layer.name,
+                             effective.geterror());
+                return false;
+            }
+            colour = &effective;
+        }
+        ok = ImageBufAlgo::mul(out, *quotient, *colour, roi, nthreads)
              && (!layer.filter || clamp_negative(out, roi, nthreads));
     }
     if (!ok) {

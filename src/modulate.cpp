@@ -103,6 +103,52 @@ remodulate(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
 }
 
 
+bool
+detail::remodulation_albedo(ImageBuf& dst, const ImageBuf& albedo,
+                            const ImageBuf& remodulation_albedo,
+                            float albedo_eps, ROI roi)
+{
+    const char* opname = "remodulate";
+    ROI rgb     = roi;
+    rgb.chbegin = 0;
+    rgb.chend   = 3;
+    if (!check_input(dst, albedo, opname, "albedo", rgb, 3)
+        || !check_input(dst, remodulation_albedo, opname,
+                        "remodulation albedo", rgb, 3))
+        return false;
+    ImageSpec spec(rgb, TypeFloat);
+    dst.reset(spec);
+    std::vector<float> own(rgb.npixels() * 3), clean(own.size());
+    if (!albedo.get_pixels(rgb, TypeFloat, own.data())
+        || !remodulation_albedo.get_pixels(rgb, TypeFloat, clean.data())) {
+        dst.errorfmt("{}: cannot read the albedos", opname);
+        return false;
+    }
+    for (size_t i = 0; i < own.size(); ++i)
+        if (albedo_demodulated(own[i], albedo_eps)
+            && albedo_demodulated(clean[i], albedo_eps))
+            own[i] = clean[i];
+    return dst.set_pixels(rgb, TypeFloat, own.data());
+}
+
+
+bool
+remodulate(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
+           const ImageBuf& remodulation_albedo, float albedo_eps, ROI roi,
+           int nthreads)
+{
+    if (!detail::prepare_dst(dst, quotient, roi, "remodulate"))
+        return false;
+    ImageBuf effective;
+    if (!detail::remodulation_albedo(effective, albedo, remodulation_albedo,
+                                     albedo_eps, roi)) {
+        dst.errorfmt("{}", effective.geterror());
+        return false;
+    }
+    return remodulate(dst, quotient, effective, albedo_eps, roi, nthreads);
+}
+
+
 ImageBuf
 remodulate(const ImageBuf& quotient, const ImageBuf& albedo, float albedo_eps,
            ROI roi, int nthreads)

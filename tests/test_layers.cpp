@@ -652,3 +652,238 @@ TEST_F(LayersCli, OutputTypeOptionKeepsCryptomatteFloat)
     expect_one_line_error(run("--in " + path("in.exr") + " -o " + path("o.exr") + " -d int"),
                           "-d");
 }
+
+
+// ---- role files and the auxiliary image (--aux, docs/AUX.md) ----
+
+// A Cycles frame of two_objects_cryptomatte whose Denoising Albedo is the
+// scene's albedo times `albedo_scale` (a stand-in for a render's own,
+// noisier albedo), with Denoising Normal and Depth when `guides`.
+class AuxCli : public LayersCli {
+protected:
+    synth::Scene s = synth::two_objects_cryptomatte(W, H, { 16, 709 }, 0.2f);
+    ImageBuf alpha = constant(1.0f, 1);
+    ImageBuf own_albedo = product(s.albedo, constant(0.8f));
+
+    std::string write_frame(const std::string& name, const ImageBuf& albedo,
+                            bool guides = false)
+    {
+        const std::string P = "ViewLayer.";
+        std::vector<Channel> ch;
+        add_rgb(ch, P + "Combined", s.noisy);
+        ch.push_back({ P + "Combined.A", &alpha, 0 });
+        add_rgb(ch, P + "CryptoObject00", s.object_id, "rgba");
+        add_rgb(ch, P + "Denoising Albedo", albedo);
+        if (guides) {
+            add_rgb(ch, P + "Denoising Normal", s.normal, "XYZ");
+            ch.push_back({ P + "Denoising Depth.Z", &s.depth, 0 });
+        }
+        ImageBuf img = assemble(ch);
+        EXPECT_TRUE(img.write(path(name))) << img.geterror();
+        return path(name);
+    }
+
+    std::string write_rgb(const std::string& name, const ImageBuf& rgb)
+    {
+        std::vector<Channel> ch;
+        add_rgb(ch, "", rgb);
+        ImageBuf img = assemble(ch);
+        EXPECT_TRUE(img.write(path(name))) << img.geterror();
+        return path(name);
+    }
+
+    ImageBuf output(const std::string& name)
+    {
+        ImageBuf out(path(name));
+        EXPECT_TRUE(out.read(0, 0, true, TypeFloat)) << out.geterror();
+        return out;
+    }
+
+    zdenoise::Guides crypto_guides() const
+    {
+        zdenoise::Guides g;
+        g.object_id = &s.object_id;
+        return g;
+    }
+};
+
+
+// --albedo given a Cycles file of its own takes its Denoising Albedo, not
+// its first three channels (CryptoObject00.r,g,b); a file of several layers
+// with no albedo by a convention is refused with its layers named.
+TEST_F(AuxCli, AlbedoFileOfSeveralLayersGivesItsAlbedoLayer)
+{
+    const std::string in    = write_frame("frame.exr", own_albedo);
+    const std::string other = write_frame("other.exr", s.albedo);
+    RunResult res = run("--in " + in + " --albedo " + other + " -o " + path("out.exr") + " -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_NE(res.out.find("albedo    '" + other + "' channels ViewLayer.Denoising Albedo.R,"),
+              std::string::npos)
+        << res.out;
+    EXPECT_LT(max_rel_diff(output("out.exr"),
+                           zdenoise::denoise(s.noisy, s.albedo, crypto_guides())),
+              1e-6f);
+
+    std::vector<Channel> ch;
+    add_rgb(ch, "foo", s.albedo);
+    add_rgb(ch, "bar", s.albedo, "rgb");
+    ImageBuf img = assemble(ch);
+    ASSERT_TRUE(img.write(path("layers.exr")));
+    for (const char* flag : { "--albedo", "--normal" }) {
+        res = run("--in " + in + " " + flag + " " + path("layers.exr") + " -o " + path("o2.exr"));
+        expect_one_line_error(res, "layers.exr");
+        EXPECT_NE(res.err.find("bar, foo"), std::string::npos) << res.err;
+        EXPECT_EQ(res.status, 1);
+    }
+    // A :ch= selection still chooses any of them.
+    res = run("--in " + in + " --albedo:ch=bar " + path("layers.exr") + " -o " + path("o3.exr"));
+    EXPECT_EQ(res.status, 0) << res.err;
+}
+
+
+// --aux with a plain RGB image: by default the auxiliary albedo
+// demodulates and remodulates (docs/AUX.md); with the internal switch
+// ZDENOISE_AUX_DEMODULATE=render the render's own albedo demodulates and
+// the auxiliary one remodulates (the library's denoise() with a
+// remodulation albedo).
+TEST_F(AuxCli, AuxAlbedoRemodulates)
+{
+    const std::string in  = write_frame("frame.exr", own_albedo);
+    const std::string aux = write_rgb("aux.exr", s.albedo);
+    RunResult res = run("--in " + in + " --aux " + aux + " -o " + path("out.exr") + " -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_NE(res.out.find("plain R,G,B image (an albedo)"), std::string::npos) << res.out;
+    EXPECT_NE(res.out.find("albedo    '" + aux + "' channels R,G,B"), std::string::npos)
+        << res.out;
+    EXPECT_LT(max_rel_diff(output("out.exr"),
+                           zdenoise::denoise(s.noisy, s.albedo, crypto_guides())),
+              1e-6f);
+
+    ::setenv("ZDENOISE_AUX_DEMODULATE", "render", 1);
+    res = run("--in " + in + " --aux " + aux + " -o " + path("out_render.exr") + " -v");
+    ::unsetenv("ZDENOISE_AUX_DEMODULATE");
+    ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_NE(res.out.find("aux albedo '" + aux + "' channels R,G,B"), std::string::npos)
+        << res.out;
+    const ImageBuf want
+        = zdenoise::denoise(s.noisy, own_albedo, &s.albedo, crypto_guides());
+    ASSERT_FALSE(want.has_error()) << want.geterror();
+    EXPECT_LT(max_rel_diff(output("out_render.exr"), want), 1e-6f);
+    // Not what the render's own albedo alone gives.
+    EXPECT_GT(max_rel_diff(want, zdenoise::denoise(s.noisy, own_albedo, crypto_guides())),
+              0.05f);
+
+    // A beauty with no albedo of its own: the auxiliary one does both.
+    const std::string plain = write_rgb("plain.exr", s.noisy);
+    res = run("--in " + plain + " --aux " + aux + " -o " + path("out_plain.exr"));
+    ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_LT(max_rel_diff(output("out_plain.exr"), zdenoise::denoise(s.noisy, s.albedo)),
+              1e-6f);
+}
+
+
+// An auxiliary Cycles file: its Denoising Albedo is the albedo, its normal
+// and depth replace the render's guides (the render here has none).
+TEST_F(AuxCli, AuxCyclesFileGivesItsGuides)
+{
+    const std::string in  = write_frame("frame.exr", own_albedo);
+    const std::string aux = write_frame("aux.exr", s.albedo, true);
+    RunResult res = run("--in " + in + " --aux " + aux + " -o " + path("out.exr") + " -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_NE(res.out.find("normal    '" + aux + "' channels ViewLayer.Denoising Normal.X"),
+              std::string::npos)
+        << res.out;
+    EXPECT_NE(res.out.find("depth     '" + aux + "' channels ViewLayer.Denoising Depth.Z"),
+              std::string::npos)
+        << res.out;
+    zdenoise::Guides g = crypto_guides();
+    g.normal           = &s.normal;
+    g.depth            = &s.depth;
+    // The id guide is the auxiliary file's (the same ranks).
+    EXPECT_LT(max_rel_diff(output("out.exr"), zdenoise::denoise(s.noisy, s.albedo, g)),
+              1e-6f);
+    // --no-normal still wins.
+    res = run("--in " + in + " --aux " + aux + " --no-normal -o " + path("o2.exr") + " -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_EQ(res.out.find("Denoising Normal"), std::string::npos) << res.out;
+}
+
+
+TEST_F(AuxCli, WrongAuxIsAOneLineErrorNamingTheFile)
+{
+    const std::string in = write_frame("frame.exr", own_albedo);
+    std::vector<Channel> ch;
+    add_rgb(ch, "foo", s.albedo);
+    add_rgb(ch, "bar", s.albedo);
+    ImageBuf img = assemble(ch);
+    ASSERT_TRUE(img.write(path("layers.exr")));
+    RunResult res = run("--in " + in + " --aux " + path("layers.exr") + " -o " + path("o.exr"));
+    expect_one_line_error(res, "aux '" + path("layers.exr") + "'");
+    EXPECT_NE(res.err.find("bar, foo"), std::string::npos) << res.err;
+    EXPECT_EQ(res.status, 1);
+
+    res = run("--in " + in + " --aux " + path("missing.exr") + " -o " + path("o.exr"));
+    expect_one_line_error(res, "missing.exr");
+    EXPECT_EQ(res.status, 1);
+
+    write_image("small.exr", W / 2, H, { "R", "G", "B" }, 0.5f);
+    res = run("--in " + in + " --aux " + path("small.exr") + " -o " + path("o.exr"));
+    expect_one_line_error(res, "small.exr");
+    EXPECT_EQ(res.status, 1);
+
+    res = run("--in " + in + " --aux:ch=nope " + path("small.exr") + " -o " + path("o.exr"));
+    expect_one_line_error(res, "small.exr");
+}
+
+
+// The library: a remodulation albedo equal to the albedo, or null, is denoise();
+// where the remodulation albedo is unusable the albedo remodulates.
+TEST(AuxLibrary, RemodulationAlbedo)
+{
+    synth::Scene s = synth::two_objects(W, H, { 16, 711 }, 0.2f);
+    const ImageBuf plain = zdenoise::denoise(s.noisy, s.albedo);
+    const ImageBuf same  = zdenoise::denoise(s.noisy, s.albedo, &s.albedo);
+    ASSERT_FALSE(same.has_error()) << same.geterror();
+    EXPECT_EQ(max_rel_diff(plain, same), 0.0f);
+    EXPECT_EQ(max_rel_diff(plain, zdenoise::denoise(s.noisy, s.albedo, nullptr)), 0.0f);
+
+    ImageBuf zero = constant(0.0f);
+    EXPECT_EQ(max_rel_diff(zdenoise::denoise(s.noisy, s.albedo, &zero), plain), 0.0f);
+
+    const ImageBuf half = product(s.albedo, constant(0.5f));
+    ImageBuf q = zdenoise::demodulate(s.noisy, s.albedo);
+    ImageBuf by_two;
+    ASSERT_TRUE(zdenoise::remodulate(by_two, q, s.albedo, half));
+    EXPECT_LT(max_rel_diff(by_two, zdenoise::remodulate(q, half)), 1e-6f);
+
+    ImageBuf small(ImageSpec(8, 8, 3, TypeFloat));
+    const ImageBuf bad = zdenoise::denoise(s.noisy, s.albedo, &small);
+    EXPECT_TRUE(bad.has_error());
+    EXPECT_NE(bad.geterror().find("remodulation albedo"), std::string::npos) << bad.geterror();
+}
+
+
+// A layer's remodulation albedo replaces its colour where both are usable:
+// the layer's own colour as remodulation albedo changes nothing, and a
+// clean colour times the filtered quotient is what a divided layer gives.
+TEST(AuxLibrary, LayerRemodulationAlbedo)
+{
+    LobeRender r;
+    const ImageBuf plain = zdenoise::layered_denoise(r.layers(true), &r.emit);
+    std::vector<zdenoise::Layer> layers = r.layers(true);
+    for (zdenoise::Layer& l : layers)
+        l.remodulation_albedo = l.albedo;
+    EXPECT_EQ(max_rel_diff(zdenoise::layered_denoise(layers, &r.emit), plain), 0.0f);
+
+    const ImageBuf brighter = product(r.diff_col, constant(1.25f));
+    layers = r.layers(true);
+    ImageBuf diff_out;
+    layers[0].remodulation_albedo = &brighter;
+    layers[0].denoised            = &diff_out;
+    ImageBuf sum = zdenoise::layered_denoise(layers, &r.emit);
+    ASSERT_FALSE(sum.has_error()) << sum.geterror();
+    const ImageBuf filtered = zdenoise::regression_filter(r.diff_z, r.diff_col);
+    ImageBuf want           = product(filtered, brighter);
+    ImageBufAlgo::clamp(want, want, 0.0f, 1e30f);
+    EXPECT_LT(max_rel_diff(diff_out, want), 1e-5f);
+}

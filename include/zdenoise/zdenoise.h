@@ -263,6 +263,44 @@ ZDENOISE_API ImageBuf denoise(const ImageBuf& radiance, const ImageBuf& albedo,
                               FilterStats* stats = nullptr, ROI roi = {},
                               int nthreads = 0);
 
+/// denoise() with a second albedo for remodulation: the radiance is
+/// demodulated by `albedo` (and filtered as that quotient), and the result
+/// is remodulated by `remodulation_albedo`, a cleaner image of the same
+/// reflectance (a deterministic auxiliary render, docs/AUX.md). A render's
+/// own albedo shares its samples with the radiance, so their quotient is
+/// free of much of the albedo's noise (anti-aliasing of texture and
+/// edges); multiplying by the clean albedo then removes what is left.
+/// Per RGB channel: where `albedo` is not demodulated the radiance passes
+/// through as in denoise(); where `remodulation_albedo` is below
+/// albedo_eps, above its inverse or non-finite, `albedo` remodulates
+/// instead. A null `remodulation_albedo` (or one equal to `albedo`) is
+/// denoise() above. A pointer, so that no call of the forms above can
+/// reach this one (or the reverse) by an image in the wrong place.
+ZDENOISE_API bool denoise(ImageBuf& dst, const ImageBuf& radiance,
+                          const ImageBuf& albedo,
+                          const ImageBuf* remodulation_albedo,
+                          const Guides& guides = {},
+                          const FilterOptions& options = {},
+                          FilterStats* stats = nullptr, ROI roi = {},
+                          int nthreads = 0);
+ZDENOISE_API ImageBuf denoise(const ImageBuf& radiance, const ImageBuf& albedo,
+                              const ImageBuf* remodulation_albedo,
+                              const Guides& guides = {},
+                              const FilterOptions& options = {},
+                              FilterStats* stats = nullptr, ROI roi = {},
+                              int nthreads = 0);
+
+/// remodulate() of a quotient demodulated by `albedo`, by
+/// `remodulation_albedo`: L = z * (Lr + eps) where `albedo` was
+/// demodulated and Lr is usable (as albedo_eps defines), z * (La + eps)
+/// where only `albedo` is, z elsewhere. The last step of the denoise()
+/// above.
+ZDENOISE_API bool remodulate(ImageBuf& dst, const ImageBuf& quotient,
+                             const ImageBuf& albedo,
+                             const ImageBuf& remodulation_albedo,
+                             float albedo_eps = 1e-3f, ROI roi = {},
+                             int nthreads = 0);
+
 /// One layer of a layered render (docs/FILTER.md section 11): the radiance of
 /// one specular history or BSDF lobe with its own albedo (colour) pass.
 struct Layer {
@@ -293,6 +331,13 @@ struct Layer {
     /// Guides of this layer (e.g. the normals seen through a mirror); each
     /// member given here replaces the shared guide of the same kind.
     Guides guides;
+    /// If not null, a cleaner image of the layer's albedo (the lobe colour
+    /// of a deterministic auxiliary render, docs/AUX.md) that remodulates
+    /// the filtered layer in place of `albedo`, which still demodulates
+    /// it (or divided it, when `divided`): as denoise() with a
+    /// remodulation albedo. Where it is not usable (below albedo_eps, above
+    /// its inverse, non-finite) `albedo` remodulates.
+    const ImageBuf* remodulation_albedo = nullptr;
     /// If not null, receives the layer's denoised radiance (RGB float, the
     /// layer's contribution to the sum), computed in roi.
     ImageBuf* denoised = nullptr;

@@ -193,7 +193,8 @@ std::vector<InputArg Job::*>
 input_members()
 {
     return { &Job::in,    &Job::albedo,   &Job::normal, &Job::depth,
-             &Job::id,    &Job::variance, &Job::half_a, &Job::half_b };
+             &Job::id,    &Job::variance, &Job::half_a, &Job::half_b,
+             &Job::aux };
 }
 
 }  // namespace

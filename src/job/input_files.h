@@ -104,11 +104,15 @@ struct RoleSelections {
     OptionalRole variance { "variance", Role::Variance, false, {} };
     OptionalRole half_a { "half A", Role::Radiance, false, {} };
     OptionalRole half_b { "half B", Role::Radiance, false, {} };
+    /// The auxiliary image's albedo, when it remodulates what the render's
+    /// own albedo demodulated (beauty mode).
+    OptionalRole remodulation { "aux albedo", Role::Albedo, false, {} };
 
     /// The optional roles, in the order -v lists them.
     std::vector<const OptionalRole*> optional() const
     {
-        return { &normal, &depth, &id, &variance, &half_a, &half_b };
+        return { &normal, &depth, &id, &variance, &half_a, &half_b,
+                 &remodulation };
     }
 };
 

@@ -54,20 +54,89 @@ apply_defaults(Job& j, const Convention& conv, std::vector<std::string>& log)
 }
 
 
-/// A half buffer given as a file of its own without a :ch= selection takes
-/// that file's beauty where its convention names one (a Cycles multilayer
-/// file's Combined), as --in does, never the file's first three channels
-/// (a Cycles file's are CryptoObject00.r, g, b).
+/// A role given as a file of its own without a :ch= selection takes what
+/// that file's convention names for the role (a Cycles multilayer file's
+/// Denoising Albedo, Denoising Normal, Combined for a half), as --in does.
+/// A file of several layers whose convention names nothing for the role
+/// and which has no plain channels for it is refused with its layers
+/// listed: never read by whichever channels end in the role's names (a
+/// Cycles file's CryptoObject00.r, g, b).
 void
-apply_half_defaults(Job& j, InputFiles& files)
+apply_file_defaults(Job& j, InputFiles& files)
 {
-    for (InputArg* half : { &j.half_a, &j.half_b })
-        if (half->given && half->channels.empty()) {
-            const Convention c
-                = detect_convention(files.header(half->path).channelnames);
-            if (!c.beauty.empty())
-                half->channels = c.beauty;
+    const struct {
+        InputArg* arg;
+        Role role;
+        std::string Convention::*named;
+    } roles[] = { { &j.albedo, Role::Albedo, &Convention::albedo },
+                  { &j.normal, Role::Normal, &Convention::normal },
+                  { &j.depth, Role::Depth, &Convention::depth },
+                  { &j.id, Role::ObjectId, &Convention::id },
+                  { &j.variance, Role::Variance, nullptr },
+                  { &j.half_a, Role::Radiance, &Convention::beauty },
+                  { &j.half_b, Role::Radiance, &Convention::beauty } };
+    for (const auto& r : roles) {
+        if (!r.arg->given || !r.arg->channels.empty())
+            continue;
+        const std::vector<std::string>& names
+            = files.header(r.arg->path).channelnames;
+        const Convention c = detect_convention(names);
+        if (r.named && !(c.*r.named).empty()) {
+            r.arg->channels = c.*r.named;
+            continue;
         }
+        if (layer_paths(names).size() < 2)
+            continue;
+        std::vector<int> idx;
+        std::string err;
+        bool plain = select_channels(names, "", r.role, idx, err);
+        for (int i : idx)
+            plain = plain && names[size_t(i)].find('.') == std::string::npos;
+        if (!plain)
+            fail(format("{} '{}': no {} by a convention among its layers "
+                        "({}); choose one with :ch=",
+                        role_name(r.role), r.arg->path, role_name(r.role),
+                        layers_text(names)));
+    }
+}
+
+
+/// --aux: its guides replace the --in file's (not those given by flag or
+/// disabled), and its albedo is the albedo when the job has none or the
+/// auxiliary one demodulates; otherwise it is returned in `remodulation`
+/// (its selection), to remodulate. Before the --in file's defaults.
+void
+apply_aux(Job& j, InputFiles& files, AuxConvention& aux,
+          std::string& remodulation, std::vector<std::string>& log)
+{
+    const InputHeader& h = files.header(j.aux.path);
+    std::string err;
+    if (!detect_aux(h.channelnames, aux, err))
+        fail(format("aux '{}': {}", j.aux.path, err));
+    if (!j.aux.channels.empty())
+        aux.albedo = j.aux.channels;
+    log.push_back(format("'{}' is the auxiliary image: a {}", j.aux.path,
+                         aux.name));
+    auto pick = [&](InputArg& arg, bool disabled, const std::string& sel) {
+        if (!arg.given && !disabled && !sel.empty())
+            arg = { j.aux.path, sel, true };
+    };
+    pick(j.normal, j.no_normal, aux.normal);
+    pick(j.depth, j.no_depth, aux.depth);
+    pick(j.id, j.no_id, aux.id);
+    const char* how = std::getenv("ZDENOISE_AUX_DEMODULATE");
+    if (how && std::string(how) == "aux")
+        j.aux_demodulation = AuxDemodulation::Aux;
+    else if (how && std::string(how) == "render")
+        j.aux_demodulation = AuxDemodulation::Render;
+    if (j.aux_demodulation == AuxDemodulation::Aux)
+        pick(j.albedo, false, aux.albedo);
+    if (!j.albedo.given
+        && detect_convention(files.header(j.in.path).channelnames)
+               .albedo.empty())
+        pick(j.albedo, false, aux.albedo);
+    if (!(j.albedo.path == j.aux.path && j.albedo.channels == aux.albedo))
+        remodulation = aux.albedo;
 }
 
 
@@ -116,8 +185,21 @@ struct Plan {
 
 /// The images of one strip's roles (those unused stay empty).
 struct RoleImages {
-    ImageBuf radiance, albedo, normal, depth, id, variance, half_a, half_b;
+    ImageBuf radiance, albedo, normal, depth, id, variance, half_a, half_b,
+        remodulation;
 };
+
+
+/// May the optional role's image be the file's rows (no conversion)?
+bool
+role_as_is(const OptionalRole& o, const Plan& p)
+{
+    if (o.role == Role::Radiance)
+        return p.radiance_as_is;
+    if (o.role == Role::Albedo)
+        return p.albedo_as_is;
+    return true;
+}
 
 
 /// What -v says of the layers (or of their absence) and of the noise.
@@ -160,8 +242,12 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
         fail(invalid);
     const InputHeader& in = files.header(j.in.path);
     const Convention conv = detect_convention(in.channelnames);
+    AuxConvention aux;
+    std::string remodulation;
+    if (j.aux.given)
+        apply_aux(j, files, aux, remodulation, result.log);
     apply_defaults(j, conv, result.log);
-    apply_half_defaults(j, files);
+    apply_file_defaults(j, files);
     const std::vector<LayerArg>& layer_args = j.layers.empty() ? conv.layers
                                                                : j.layers;
     if (j.mode == Mode::Layers && layer_args.empty())
@@ -172,10 +258,16 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
                 || (j.mode == Mode::Auto && !j.layers.empty());
     if (!p.layered && !j.albedo.given)
         fail(format("no albedo: '{}' has no Denoising Albedo pass; give "
-                    "--albedo FILE",
+                    "--albedo FILE or --aux FILE",
                     j.in.path));
     p.noisy = in.window();
     p.roles = select_roles(files, j, p.layered);
+    if (!p.layered && !remodulation.empty()) {
+        p.roles.remodulation.selection
+            = select_role(files, { j.aux.path, remodulation, true },
+                          Role::Albedo, &p.noisy, j.in.path);
+        p.roles.remodulation.used = true;
+    }
 
     // Radiance and albedo RGB into the working space (ocio/colour.h).
     p.managed = resolve_colour(j, files, p.config, p.spaces, result.log);
@@ -254,8 +346,7 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
     for (const OptionalRole* o : p.roles.optional())
         if (o->used)
             cost.held_pixel += role_bytes(files, o->selection,
-                                          o->role != Role::Radiance
-                                              || p.radiance_as_is);
+                                          role_as_is(*o, p));
     if (p.layered) {
         // Each layer's radiance and albedo sums, the residual and the sum
         // (over the held rows), each denoised layer (over the strip).
@@ -308,8 +399,7 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
     // the files' rows.
     const RoleSelections& roles = p.roles;
     auto read = [&](const OptionalRole& o) {
-        return o.used ? strip.image(o.selection, o.role != Role::Radiance
-                                                     || p.radiance_as_is)
+        return o.used ? strip.image(o.selection, role_as_is(o, p))
                       : ImageBuf();
     };
     RoleImages img;
@@ -322,6 +412,7 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
     img.variance = read(roles.variance);
     img.half_a   = read(roles.half_a);
     img.half_b   = read(roles.half_b);
+    img.remodulation = read(roles.remodulation);
     auto convert = [&](ImageBuf& image, const std::string& from,
                        const std::string& to, const InputArg& arg) {
         std::string err;
@@ -331,6 +422,7 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
     if (p.managed) {
         convert(img.radiance, p.spaces.input, p.spaces.working, j.in);
         convert(img.albedo, p.spaces.albedo, p.spaces.working, j.albedo);
+        convert(img.remodulation, p.spaces.albedo, p.spaces.working, j.aux);
         convert(img.half_a, p.spaces.input, p.spaces.working, j.half_a);
         convert(img.half_b, p.spaces.input, p.spaces.working, j.half_b);
     }
@@ -366,8 +458,9 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
                                           : nullptr,
                                       guides, options, &st, strip.core,
                                       j.threads)
-                    : denoise(denoised, img.radiance, img.albedo, guides,
-                              options, &st, strip.core, j.threads);
+                    : denoise(denoised, img.radiance, img.albedo,
+                              guide(roles.remodulation, img.remodulation),
+                              guides, options, &st, strip.core, j.threads);
     if (!ok)
         fail(format("denoising '{}' failed: {}", j.in.path,
                     one_line(denoised.geterror())));
@@ -435,7 +528,7 @@ input_paths(const Job& j)
 {
     std::vector<std::string> paths;
     for (const InputArg* a : { &j.in, &j.albedo, &j.normal, &j.depth, &j.id,
-                               &j.variance, &j.half_a, &j.half_b })
+                               &j.variance, &j.half_a, &j.half_b, &j.aux })
         if (a->given)
             paths.push_back(a->path);
     return paths;

@@ -46,8 +46,20 @@ struct InputArg {
 /// lose slightly on newspaper and zigzag_steps).
 enum class Mode { Auto, Beauty, Layers };
 
+/// What the render's radiance is divided by when an auxiliary image
+/// (--aux) is given: the render's own albedo (sharing the radiance's
+/// samples, so their quotient cancels much of the albedo's noise) or the
+/// auxiliary one. Either way the auxiliary albedo remodulates. An internal
+/// switch for measurement (docs/AUX.md), read from ZDENOISE_AUX_DEMODULATE
+/// (render|aux); no option sets it.
+enum class AuxDemodulation { Render, Aux };
+
 struct Job {
     InputArg in, albedo, normal, depth, id, variance, half_a, half_b;
+    /// The deterministic auxiliary image of the same shot (docs/AUX.md):
+    /// its albedo remodulates, its guides replace the --in file's.
+    InputArg aux;
+    AuxDemodulation aux_demodulation = AuxDemodulation::Aux;
     bool no_normal = false, no_depth = false, no_id = false;
     FilterOptions filter;
     colour::ColourOptions colour;

@@ -40,24 +40,6 @@ has_layer(const std::vector<std::string>& names, const std::string& layer,
     return all(false) || all(true);
 }
 
-/// The layer part (all but the last '.'-separated part) of each channel, in
-/// order of first appearance.
-std::vector<std::string>
-layer_paths(const std::vector<std::string>& names)
-{
-    std::vector<std::string> layers;
-    std::set<std::string> seen;
-    for (const std::string& n : names) {
-        const size_t dot = n.rfind('.');
-        if (dot == std::string::npos || dot == 0)
-            continue;
-        std::string layer = n.substr(0, dot);
-        if (seen.insert(layer).second)
-            layers.push_back(layer);
-    }
-    return layers;
-}
-
 std::string
 lower(std::string s)
 {
@@ -126,12 +108,30 @@ cycles_convention(const std::vector<std::string>& names,
         // Gloss and Trans are light through a glossy bounce.
         if (!colour.empty() && !lighting.empty())
             c.layers.push_back({ prefix + lobe, lighting, colour, true,
-                                 std::string(lobe) != "Diff" });
+                                 std::string(lobe) != "Diff", lobe });
     }
     c.residual_albedo     = c.albedo;
     c.residual_layer      = prefix + "Residual";
     c.residual_unfiltered = pass("Env", "RGB");
     return c;
+}
+
+
+/// The Arnold-style names of the albedo and the guides.
+void
+aov_passes(const std::vector<std::string>& names, Convention& c)
+{
+    for (const char* albedo : { "albedo", "denoise_albedo" })
+        if (c.albedo.empty() && has_layer(names, albedo, "RGB"))
+            c.albedo = albedo;
+    for (const char* normal : { "N", "normal" })
+        if (c.normal.empty()
+            && (has_layer(names, normal, "XYZ")
+                || has_layer(names, normal, "RGB")))
+            c.normal = normal;
+    if (has_channel(names, "Z"))
+        c.depth = "Z";
+    c.id = cryptomatte_object_selection(names);
 }
 
 
@@ -149,11 +149,11 @@ aov_convention(const std::vector<std::string>& names)
             continue;
         const bool reflected = is_reflected_lobe(last_part(x));
         if (has_layer(names, x, "RGB"))
-            c.layers.push_back({ x, x, layer, false, reflected });
+            c.layers.push_back({ x, x, layer, false, reflected, x });
         else if (has_layer(names, x + "_direct", "RGB")
                  && has_layer(names, x + "_indirect", "RGB"))
             c.layers.push_back({ x, x + "_direct+" + x + "_indirect", layer,
-                                 false, reflected });
+                                 false, reflected, x });
     }
     if (c.layers.empty())
         return c;
@@ -162,21 +162,90 @@ aov_convention(const std::vector<std::string>& names)
                             : "AOVs with *_albedo (Arnold style)";
     if (has_layer(names, "residual", "RGB"))
         c.residual = "residual";
-    for (const char* albedo : { "albedo", "denoise_albedo" })
-        if (c.albedo.empty() && has_layer(names, albedo, "RGB"))
-            c.albedo = albedo;
-    for (const char* normal : { "N", "normal" })
-        if (c.normal.empty()
-            && (has_layer(names, normal, "XYZ")
-                || has_layer(names, normal, "RGB")))
-            c.normal = normal;
-    if (has_channel(names, "Z"))
-        c.depth = "Z";
-    c.id = cryptomatte_object_selection(names);
+    aov_passes(names, c);
     return c;
 }
 
 }  // namespace
+
+
+/// The layer part (all but the last '.'-separated part) of each channel, in
+/// order of first appearance.
+std::vector<std::string>
+layer_paths(const std::vector<std::string>& names)
+{
+    std::vector<std::string> layers;
+    std::set<std::string> seen;
+    for (const std::string& n : names) {
+        const size_t dot = n.rfind('.');
+        if (dot == std::string::npos || dot == 0)
+            continue;
+        std::string layer = n.substr(0, dot);
+        if (seen.insert(layer).second)
+            layers.push_back(layer);
+    }
+    return layers;
+}
+
+
+bool
+detect_aux(const std::vector<std::string>& names, AuxConvention& aux,
+           std::string& error)
+{
+    aux = {};
+    std::string prefix;
+    Convention c;
+    if (cycles_prefix(names, prefix)) {
+        c = cycles_convention(names, prefix);
+        for (const char* lobe : { "Diff", "Gloss", "Trans" }) {
+            const std::string colour = prefix + lobe + "Col";
+            if (has_layer(names, colour, "RGB"))
+                aux.lobe_colours.push_back({ lobe, colour });
+        }
+    } else {
+        aov_passes(names, c);
+        c.name = "AOVs (albedo, N, Z, crypto_object)";
+        for (const std::string& layer : layer_paths(names))
+            if (OIIO::Strutil::ends_with(layer, "_albedo") && layer.size() > 7
+                && has_layer(names, layer, "RGB"))
+                aux.lobe_colours.push_back(
+                    { layer.substr(0, layer.size() - 7), layer });
+        if (c.albedo.empty() && has_channel(names, "R")
+            && has_channel(names, "G") && has_channel(names, "B")) {
+            c.name   = "plain R,G,B image (an albedo)";
+            c.albedo = "R,G,B";
+        }
+    }
+    if (c.albedo.empty()) {
+        error = format("no albedo: neither a Cycles 'Denoising Albedo', an "
+                       "'albedo' layer nor plain R,G,B; its layers are {}",
+                       layers_text(names));
+        return false;
+    }
+    aux.name   = c.name;
+    aux.albedo = c.albedo;
+    aux.normal = c.normal;
+    aux.depth  = c.depth;
+    aux.id     = c.id;
+    return true;
+}
+
+
+std::string
+layers_text(const std::vector<std::string>& names)
+{
+    std::vector<std::string> parts = layer_paths(names);
+    for (const std::string& n : names) {
+        const size_t dot = n.rfind('.');
+        if (dot == std::string::npos || dot == 0)
+            parts.push_back(n);
+    }
+    std::string text;
+    for (const std::string& p : parts)
+        text += (text.empty() ? "" : ", ") + p;
+    return text.empty() ? "none" : text;
+}
+
 
 
 std::string

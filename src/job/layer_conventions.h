@@ -29,6 +29,10 @@ struct LayerArg {
     bool divided = false;
     /// Light through a glossy or specular bounce (zdenoise::Layer::reflected).
     bool reflected = false;
+    /// The lobe a convention found it as ("Diff", "Gloss", "Trans" in a
+    /// Cycles file), which names its colour in an auxiliary image
+    /// (AuxConvention::lobe_colours); empty for --layer.
+    std::string lobe;
 };
 
 /// What a file's channel names say, by the first convention that matches.
@@ -55,6 +59,36 @@ struct Convention {
     /// guides only blurs (docs/LAYERS.md).
     std::string residual_unfiltered;
 };
+
+/// What an auxiliary image (--aux, docs/AUX.md) holds, by the first
+/// convention its channel names match: a Blender Cycles multilayer EXR
+/// (zdenoise_aux.py writes one), AOVs named as the Arnold style, or a plain
+/// R,G,B image (an albedo).
+struct AuxConvention {
+    std::string name;  ///< as -v shows it
+    /// Selections; the albedo is never empty, the others may be.
+    std::string albedo, normal, depth, id;
+    /// The colour of each lobe it has, by LayerArg::lobe ("Diff" ->
+    /// "ViewLayer.DiffCol").
+    std::vector<std::pair<std::string, std::string>> lobe_colours;
+};
+
+/// The auxiliary image's passes; false with a one-line `error` naming the
+/// file's layers when it has no albedo by any convention.
+bool
+detect_aux(const std::vector<std::string>& names, AuxConvention& aux,
+           std::string& error);
+
+/// The layer part (all but the last '.'-separated part) of each channel
+/// name, in order of first appearance.
+std::vector<std::string>
+layer_paths(const std::vector<std::string>& names);
+
+/// The layers of a file's channels (all but the last '.'-separated part,
+/// in order), as messages list them: "ViewLayer.Combined, ViewLayer.Depth";
+/// channels of no layer are listed as themselves.
+std::string
+layers_text(const std::vector<std::string>& names);
 
 /// Recognise, in order: a Blender Cycles multilayer EXR (<prefix>Combined),
 /// else AOVs named X with X_albedo (Arnold style, and our specular depth

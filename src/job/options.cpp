@@ -61,6 +61,7 @@ Inputs (each FILE may take a channel selection, oiiotool style:
 --albedo:ch=R,G,B FILE, or a layer name: --albedo:ch="Denoising Albedo" FILE):
 {--in}
 {--albedo}
+{--aux}
 {--normal}
 {--depth}
 {--id}
@@ -157,6 +158,14 @@ options()
         { Kind::Input, "--albedo", "albedo", FIELD(job.albedo), "FILE",
           "Noise-free albedo (R,G,B). Required unless --in is a\n"
           "Blender Cycles multilayer EXR." },
+        { Kind::Input, "--aux", "aux", FIELD(job.aux), "FILE",
+          "Deterministic auxiliary image of the same shot\n"
+          "(share/blender/zdenoise_aux.py renders one; docs/AUX.md):\n"
+          "its albedo remodulates (in --mode layers its lobe\n"
+          "colours too), its normal, depth and object ids replace\n"
+          "the --in file's guides. A Cycles multilayer EXR, AOVs\n"
+          "(albedo, N, Z) or a plain R,G,B image (an albedo);\n"
+          ":ch= names its albedo." },
         { Kind::Input, "--normal", "normal", FIELD(job.normal), "FILE",
           "Normal guide (X,Y,Z)." },
         { Kind::Input, "--depth", "depth", FIELD(job.depth), "FILE",
