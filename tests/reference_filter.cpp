@@ -909,6 +909,38 @@ Filter::run(RefStats* stats)
                     passthrough = true;
                     float zc    = z_in.at(x, y, c);
                     out.at(x, y, c) = std::isfinite(zc) ? zc : 0.0f;
+                    if (!std::isfinite(zc) && receiver(x, y, c)) {
+                        // A hole: the plane through the light of the fit
+                        // points within 2 r_max, weights g exp(-d^2 / r_max^2),
+                        // at the hole, within their range.
+                        const int R = 2 * opt.r_max;
+                        std::vector<Pt> pts;
+                        double lo = INF, hi = -INF;
+                        for (int yq = std::max(y - R, 0); yq <= std::min(y + R, h - 1); ++yq)
+                            for (int xq = std::max(x - R, 0); xq <= std::min(x + R, w - 1); ++xq) {
+                                if (!fitpt(xq, yq))
+                                    continue;
+                                const double gq = guide_weight(xq, yq, x, y);
+                                if (!(gq > 0.0))
+                                    continue;
+                                const int dx = xq - x, dy = yq - y;
+                                Pt p {};
+                                p.x = xq;
+                                p.y = yq;
+                                p.u = double(dx) / R;
+                                p.v = double(dy) / R;
+                                p.w = gq * std::exp(-double(dx * dx + dy * dy)
+                                                    / (double(opt.r_max) * opt.r_max));
+                                for (int k = 0; k < 3; ++k)
+                                    p.z[k] = z.at(xq, yq, k);
+                                lo = std::min(lo, p.z[c]);
+                                hi = std::max(hi, p.z[c]);
+                                pts.push_back(p);
+                            }
+                        const Fit f = fit(pts);
+                        if (f.present)
+                            out.at(x, y, c) = float(std::min(std::max(f.at(c, 0, 0), lo), hi));
+                    }
                 }
             }
             if (passthrough)

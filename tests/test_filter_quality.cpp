@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <cstdio>
 #include <string>
@@ -450,4 +451,39 @@ TEST(FilterQuality, FirefliesKeepTheirEnergySpreadAroundThem)
     EXPECT_LT(left / added, 0.4);
     EXPECT_LT(brightest, 1.5 * clean_max) << "a firefly is left standing";
     expect_denoised(s, out, 5.0, "fireflies");
+}
+
+
+// A hole of NaN radiance on a surface, wider than any window reaches
+// (40 px with r_max 16), is filled from the light around it times its own
+// albedo (docs/FILTER.md section 7): the texture under it comes back and
+// its relMSE is within a few times the frame's, in beauty and in layers.
+// (The hole lies in the lit half of a shadow edge.)
+TEST(FilterQuality, NanHoleIsFilledFromTheLightAroundIt)
+{
+    Scene s = synth::shadow_edge(128, 128, { 16, 515 });
+    std::vector<float> px = synth::pixels(s.noisy);
+    const int x0 = 12, x1 = 52, y0 = 44, y1 = 84;
+    for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x)
+            for (int c = 0; c < 3; ++c)
+                px[(size_t(y) * 128 + x) * 3 + c] = std::numeric_limits<float>::quiet_NaN();
+    s.noisy = synth::make_image(128, 128, 3, px);
+    std::vector<zdenoise::Layer> layers(1);
+    layers[0].name     = "all";
+    layers[0].radiance = &s.noisy;
+    layers[0].albedo   = &s.albedo;
+    const ImageBuf beauty  = run_denoise(s, {});
+    const ImageBuf layered = zdenoise::layered_denoise(layers, nullptr);
+    ASSERT_FALSE(layered.has_error()) << layered.geterror();
+    for (const ImageBuf* out : { &beauty, &layered }) {
+        const char* mode = out == &beauty ? "beauty" : "layers";
+        const double frame = synth::rel_mse(*out, s.clean);
+        const double hole  = synth::rel_mse(*out, s.clean, x0, x1, y0, y1);
+        std::printf("  40 px NaN hole (%s): relMSE frame %.4g, hole %.4g; mean "
+                    "luminance in the hole %.4f, truth %.4f\n", mode, frame, hole,
+                    synth::mean_luminance(*out, x0, x1, y0, y1),
+                    synth::mean_luminance(s.clean, x0, x1, y0, y1));
+        EXPECT_LT(hole, 4.0 * frame) << mode;
+    }
 }

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <random>
 #include <string>
 #include <utility>
 #include <vector>
@@ -509,4 +510,27 @@ TEST(FilterReference, DemodulateRemodulate)
         EXPECT_EQ(bad_lib, 0) << "library remodulate(demodulate(L)) != L";
         EXPECT_EQ(bad_ref, 0) << "reference remodulate(demodulate(L)) != L";
     }
+}
+
+
+// Outliers split and spread (section 3a) and a hole no window reaches filled
+// (section 7): a firefly field and a 16 px NaN patch with r_max 5, with
+// normals and depth.
+TEST(FilterReference, FirefliesAndAHole)
+{
+    Case k{ "fireflies and a hole", synth::staircase(W, H, 8, { 16, 23 }) };
+    k.normal = k.depth = true;
+    k.whole_denoise    = true;
+    std::vector<float> px = synth::pixels(k.s.noisy);
+    std::mt19937 rng(5);
+    for (size_t i = 0; i < px.size() / 3; ++i)
+        if (rng() % 60 == 0)
+            for (int c = 0; c < 3; ++c)
+                px[3 * i + c] *= 30.0f;
+    for (int y = 8; y < 24; ++y)
+        for (int x = 10; x < 26; ++x)
+            for (int c = 0; c < 3; ++c)
+                px[(size_t(y) * W + x) * 3 + c] = std::numeric_limits<float>::quiet_NaN();
+    k.s.noisy = synth::make_image(W, H, 3, px);
+    run_case(k);
 }

@@ -8,7 +8,7 @@
 //   decode_filter_inputs()  pixel classes, guides, noise     (sections 2-4)
 //   fit_centres()           every centre's window fitted and
 //                           splatted, in blocks and phases    (5, 6, 8)
-//   normalise_output()      acc / wsum, pass-through          (7)
+//   normalise_output()      acc / wsum, pass-through, holes   (7)
 
 #include <zdenoise/zdenoise.h>
 
@@ -21,6 +21,7 @@
 
 #include "centre_blocks.h"
 #include "filter_inputs.h"
+#include "hole_fill.h"
 #include "internal.h"
 #include "outliers.h"
 #include "window_fitter.h"
@@ -134,8 +135,8 @@ fit_centres(const FilterInputs& in, const FilterOptions& opt, const ROI& roi,
 /// output, passed-through and non-finite pixels into st.
 bool
 normalise_output(ImageBuf& dst, const ImageBuf& quotient,
-                 const FilterInputs& in, const Splats& splats, ROI roi,
-                 int nthreads, FilterStats& st)
+                 const FilterInputs& in, const FilterOptions& opt,
+                 const Splats& splats, ROI roi, int nthreads, FilterStats& st)
 {
     const size_t npix_out = size_t(roi.width()) * size_t(roi.height());
     ROI all_ch = roi;
@@ -160,7 +161,10 @@ normalise_output(ImageBuf& dst, const ImageBuf& quotient,
                               + splats.spread[3 * o + ch]);
                 } else {
                     passed = true;
-                    if (!std::isfinite(v))
+                    // A hole: no window reached a non-finite value.
+                    if (!std::isfinite(v)
+                        && !((cl & (kReceiveR << ch))
+                             && hole_light(in, opt, x, int(y), ch, v)))
                         v = 0.0f;
                 }
             }
@@ -197,7 +201,7 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
     Splats splats(size_t(roi.width()) * size_t(roi.height()));
     FilterStats tile = fit_centres(in, opt, roi, nthreads, splats);
     spread_outliers(in, opt, roi, splats.spread, nthreads);
-    if (!normalise_output(dst, quotient, in, splats, roi, nthreads, tile))
+    if (!normalise_output(dst, quotient, in, opt, splats, roi, nthreads, tile))
         return false;
     totals.merge(tile);
     return true;
