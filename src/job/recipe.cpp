@@ -246,6 +246,13 @@ apply_overrides(json& recipe,
         int whole            = 0;
         if (key == "preset")
             continue;
+        // A recipe is JSON, and JSON text is UTF-8: a recipe read with such
+        // an argument could not be written back (found by fuzz_recipe).
+        try {
+            (void)json(text).dump();
+        } catch (const json::exception&) {
+            fail(format("argument '{}' is not UTF-8 text", key));
+        }
         if (key == kVersionKey || (option && !option->in_file_name))
             fail(format("argument '{}' cannot be given after the '?'; edit "
                         "the recipe",
