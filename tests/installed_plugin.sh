@@ -10,8 +10,9 @@ trap 'rm -rf "$scratch"' EXIT
 cmake --install "$build_dir" --prefix "$scratch/prefix" >/dev/null
 plugin=$(find "$scratch/prefix" -name zdenoise.imageio.so)
 [ -n "$plugin" ] || { echo "zdenoise.imageio.so not installed"; exit 1; }
-"$scratch/prefix/bin/zdenoise" --in "$source_dir/share/samples/cornell_textured_spp16_crop.exr" \
-    --write-recipe "$scratch/shot.zdn"
+# A recipe reads files in its own folder (share/zdn-format.md).
+cp "$source_dir/share/samples/cornell_textured_spp16_crop.exr" "$scratch/shot.exr"
+"$scratch/prefix/bin/zdenoise" --in "$scratch/shot.exr" --write-recipe "$scratch/shot.zdn"
 # ZDENOISE_HOST_ENV: in a sanitized build, the sanitizer runtime iinfo must
 # preload to load the plugin (tests/CMakeLists.txt); words of VAR=value.
 # shellcheck disable=SC2086

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -82,6 +83,8 @@ protected:
               + info->name() + "_" + std::to_string(::getpid());
         Filesystem::remove_all(dir);
         Filesystem::create_directory(dir);
+        // A recipe reads files in its folder only (share/zdn-format.md).
+        ASSERT_TRUE(Filesystem::copy(kSample, path("sample.exr")));
     }
     void TearDown() override
     {
@@ -142,11 +145,12 @@ protected:
     std::string dir;
 };
 
-/// A recipe for the bundled sample with the given extra JSON lines.
+/// A recipe for the bundled sample (its copy in the test's folder) with
+/// the given extra JSON lines.
 std::string
 sample_recipe(const std::string& extra = "")
 {
-    return "{\n  \"zdenoise-recipe\": 1,\n  \"in\": \"" + kSample + "\""
+    return "{\n  \"zdenoise-recipe\": 1,\n  \"in\": \"sample.exr\""
            + (extra.empty() ? "" : ",\n  " + extra) + "\n}\n";
 }
 
@@ -248,18 +252,165 @@ TEST_F(PluginTest, KeepsEachChannelsPixelType)
 
 TEST_F(PluginTest, InputPathsAreRelativeToTheRecipesFolder)
 {
-    Filesystem::create_directory(path("renders"));
-    Filesystem::create_directory(path("recipes"));
-    ASSERT_TRUE(Filesystem::copy(kSample, path("renders/shot.exr")));
-    write_text("recipes/shot.zdn",
-               R"({"zdenoise-recipe": 1, "in": "../renders/shot.exr"})");
+    Filesystem::create_directory(path("shots"));
+    Filesystem::create_directory(path("shots/renders"));
+    ASSERT_TRUE(Filesystem::copy(kSample, path("shots/renders/shot.exr")));
+    write_text("shots/shot.zdn",
+               R"({"zdenoise-recipe": 1, "in": "renders/shot.exr"})");
     RunResult r = zdenoise("--in " + quoted(kSample) + " -o " + quoted(path("cli.exr")));
     ASSERT_EQ(r.status, 0) << r.err;
     // Run from another folder.
-    r = run("cd / && " + host_program(kOiiotool) + " " + quoted(path("recipes/shot.zdn")) + " -o "
+    r = run("cd / && " + host_program(kOiiotool) + " " + quoted(path("shots/shot.zdn")) + " -o "
             + quoted(path("plugin.exr")));
     ASSERT_EQ(r.status, 0) << r.err;
     expect_identical(path("cli.exr"), path("plugin.exr"));
+}
+
+
+TEST_F(PluginTest, RecipesReadOnlyFilesInTheirFolder)
+{
+    // The recipes' folder, and a folder beside it they may not read.
+    Filesystem::create_directory(path("recipes"));
+    Filesystem::create_directory(path("outside"));
+    ASSERT_TRUE(Filesystem::copy(kSample, path("outside/shot.exr")));
+    ASSERT_TRUE(Filesystem::copy(kSample, path("recipes/own.exr")));
+    ASSERT_EQ(::symlink(path("outside/shot.exr").c_str(), path("recipes/link.exr").c_str()), 0);
+    ASSERT_EQ(::symlink("../outside", path("recipes/linked").c_str()), 0);
+    ASSERT_EQ(::mkfifo(path("recipes/fifo.exr").c_str(), 0600), 0);
+    const std::string outside = path("outside/shot.exr");
+    const std::string recipes = path("recipes");
+    auto recipe = [](const std::string& key, const std::string& value) {
+        return "{\"zdenoise-recipe\": 1, \"in\": \"own.exr\", \"" + key + "\": \"" + value
+               + "\"}";
+    };
+    struct Case {
+        const char* name;
+        std::string text;
+        std::string problem;  ///< expected in the message
+        bool listed_reads;    ///< read once ZDENOISE_RECIPE_PATH lists outside/
+    } cases[] = {
+        { "absolute.zdn", recipe("in", outside),
+          "\"in\" is '" + outside + "': an absolute path outside the recipe's folder", true },
+        { "dotdot.zdn", recipe("in", "../outside/shot.exr"),
+          "\"in\" is '../outside/shot.exr': '..' leads out of the recipe's folder", true },
+        { "deep_dotdot.zdn", recipe("albedo", "a/../../outside/shot.exr"),
+          "\"albedo\" is 'a/../../outside/shot.exr': '..' leads out of",
+          true },
+        { "symlink.zdn", recipe("in", "link.exr"),
+          "\"in\" is 'link.exr': a symbolic link leads out of the recipe's folder", true },
+        { "linked_folder.zdn", recipe("in", "linked/shot.exr"),
+          "\"in\" is 'linked/shot.exr': a symbolic link leads out of",
+          true },
+        { "halves.zdn",
+          "{\"zdenoise-recipe\": 1, \"in\": \"own.exr\", \"halves\": [\"own.exr\", \"" + outside
+              + "\"]}",
+          "\"halves\" is '" + outside + "'", true },
+        { "colorconfig.zdn", recipe("colorconfig", "/etc/passwd"),
+          "\"colorconfig\" is '/etc/passwd': an absolute path outside", false },
+        { "fifo.zdn", recipe("in", "fifo.exr"), "\"in\" is 'fifo.exr': not a regular file",
+          false },
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.name);
+        write_text("recipes/" + std::string(c.name), c.text);
+        const std::string name = path("recipes/" + std::string(c.name));
+        RunResult r = oiiotool(quoted(name) + " -o " + quoted(path("out.exr")));
+        EXPECT_EQ(r.status, 1) << r.err;
+        EXPECT_NE(r.err.find("recipe '" + name + "': " + c.problem), std::string::npos) << r.err;
+        if (c.problem.find("not a regular file") == std::string::npos) {
+            EXPECT_NE(r.err.find("or in the folders ZDENOISE_RECIPE_PATH lists"),
+                      std::string::npos)
+                << "the message names the variable that allows more: " << r.err;
+        }
+        EXPECT_FALSE(Filesystem::exists(path("out.exr")));
+        r = run("ZDENOISE_RECIPE_PATH=" + quoted("/nonexistent:" + path("outside")) + " "
+                + host_program(kIinfo) + " " + quoted(name));
+        EXPECT_EQ(r.status == 0, c.listed_reads) << r.out << r.err;
+    }
+    // A file name's override is confined like the recipe's own keys.
+    write_text("recipes/own.zdn", recipe("albedo", "own.exr"));
+    RunResult r = oiiotool(quoted(path("recipes/own.zdn") + "?in=" + outside) + " -o "
+                           + quoted(path("out.exr")));
+    EXPECT_EQ(r.status, 1) << r.err;
+    r = run(host_program(kIinfo) + " " + quoted(path("recipes/own.zdn") + "?in=" + outside));
+    EXPECT_NE(r.err.find("\"in\" is '" + outside + "': an absolute path outside"),
+              std::string::npos)
+        << r.out << r.err;
+    // An absolute path inside the recipe's folder is read.
+    write_text("recipes/own_absolute.zdn", recipe("albedo", recipes + "/own.exr"));
+    r = run(host_program(kIinfo) + " " + quoted(path("recipes/own_absolute.zdn")));
+    EXPECT_EQ(r.status, 0) << r.err;
+    // A malformed ZDENOISE_RECIPE_PATH fails every recipe, naming it.
+    r = run("ZDENOISE_RECIPE_PATH=relative/folder " + host_program(kIinfo) + " "
+            + quoted(path("recipes/own.zdn")));
+    EXPECT_NE(r.status, 0);
+    EXPECT_NE(r.err.find("ZDENOISE_RECIPE_PATH: 'relative/folder' is not an absolute folder"),
+              std::string::npos)
+        << r.err;
+}
+
+
+TEST_F(PluginTest, RecipeCostIsBounded)
+{
+    struct Case {
+        const char* name;
+        std::string text;
+        std::string problem;  ///< expected in the message
+        std::string limits;   ///< a ZDENOISE_RECIPE_LIMITS that allows it
+    } cases[] = {
+        { "rmax.zdn", sample_recipe("\"rmax\": 40"),
+          "\"rmax\" is 40: more than the 32 a recipe may ask for "
+          "(ZDENOISE_RECIPE_LIMITS=rmax=N allows more)",
+          "rmax=40" },
+        { "rmax_override.zdn?rmax=33", sample_recipe(), "\"rmax\" is 33", "rmax=0" },
+        { "layers.zdn",
+          sample_recipe("\"mode\": \"layers\", \"layers\": ["
+                        + [] {
+                              std::string list;
+                              for (int k = 0; k < 17; ++k)
+                                  list += std::string(k ? ", " : "") + "\"l" + std::to_string(k)
+                                          + "=ViewLayer.DiffDir:ViewLayer.DiffCol:divided\"";
+                              return list;
+                          }()
+                        + "]"),
+          "\"layers\" lists 17 layers: more than the 16 a recipe may "
+          "(ZDENOISE_RECIPE_LIMITS=layers=N allows more)",
+          "layers=17" },
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.name);
+        const std::string file = std::string(c.name).substr(0, std::string(c.name).find('?'));
+        write_text(file, c.text);
+        // iinfo reports an override's refusal (oiiotool 2.4: "does not exist").
+        RunResult r = run(host_program(kIinfo) + " " + quoted(path(c.name)));
+        EXPECT_NE(r.status, 0) << r.err;
+        EXPECT_NE(r.err.find("recipe '" + path(file) + "': " + c.problem), std::string::npos)
+            << r.err;
+        r = run("ZDENOISE_RECIPE_LIMITS=" + c.limits + " " + host_program(kIinfo) + " "
+                + quoted(path(c.name)));
+        EXPECT_EQ(r.status, 0) << r.err;
+    }
+    // The image: the sample is 96x96.
+    write_text("shot.zdn", sample_recipe());
+    RunResult r = run("ZDENOISE_RECIPE_LIMITS='rmax=16, pixels=9215' " + host_program(kIinfo) + " "
+                      + quoted(path("shot.zdn")));
+    EXPECT_NE(r.status, 0);
+    EXPECT_NE(r.err.find("recipe '" + path("shot.zdn") + "': '" + path("sample.exr")
+                         + "' is 96x96, 9216 pixels: more than the 9215 a recipe may denoise "
+                         "(ZDENOISE_RECIPE_LIMITS=pixels=N allows more)"),
+              std::string::npos)
+        << r.err;
+    r = run("ZDENOISE_RECIPE_LIMITS=pixels=9K " + host_program(kIinfo) + " "
+            + quoted(path("shot.zdn")));
+    EXPECT_EQ(r.status, 0) << r.err;
+    // A malformed value fails every recipe, naming the variable.
+    r = run("ZDENOISE_RECIPE_LIMITS=radius=8 " + host_program(kIinfo) + " "
+            + quoted(path("shot.zdn")));
+    EXPECT_NE(r.status, 0);
+    EXPECT_NE(r.err.find("ZDENOISE_RECIPE_LIMITS: 'radius=8' must be rmax=N, layers=N or "
+                         "pixels=N"),
+              std::string::npos)
+        << r.err;
 }
 
 
@@ -332,8 +483,8 @@ TEST_F(PluginTest, BrokenRecipesAreOiioErrorsNotCrashes)
         { "missing_input.zdn", "{\"zdenoise-recipe\": 1, \"in\": \"nope.exr\"}",
           "nope.exr': no such file" },
         { "missing_channel.zdn",
-          sample_recipe("\"albedo\": {\"path\": \"" + kSample
-                        + "\", \"channels\": \"Diffuse.R,Diffuse.G,Diffuse.B\"}"),
+          sample_recipe("\"albedo\": {\"path\": \"sample.exr\", "
+                        "\"channels\": \"Diffuse.R,Diffuse.G,Diffuse.B\"}"),
           "Diffuse.R" },
         { "typo.zdn", sample_recipe("\"etaa\": 0.03"), "unknown key \"etaa\"" },
         { "bad_value.zdn", sample_recipe("\"rmax\": \"big\""), "\"rmax\" must be a number" },
@@ -388,7 +539,21 @@ TEST_F(PluginTest, WriteRecipeRoundTrip)
     ASSERT_TRUE(Filesystem::copy(kSample, path("renders/shot.exr")));
     const std::string flags = "--in " + quoted(path("renders/shot.exr"))
                               + " --no-depth --eta 0.03 --rmax 12 --stride 2 --threads 1";
+    // The inputs lie outside the recipe's folder: not written unless
+    // ZDENOISE_RECIPE_PATH lets the plugin read them.
     RunResult r = zdenoise(flags + " --write-recipe " + quoted(path("recipes/shot.zdn")));
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("cannot write recipe '" + path("recipes/shot.zdn")
+                         + "': it would not be read: \"in\" is '../renders/shot.exr': '..' "
+                           "leads out of the recipe's folder"),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("or list their folder in ZDENOISE_RECIPE_PATH"), std::string::npos)
+        << r.err;
+    EXPECT_FALSE(Filesystem::exists(path("recipes/shot.zdn")));
+    const std::string allow = "ZDENOISE_RECIPE_PATH=" + quoted(path("renders")) + " ";
+    r = run(allow + quoted(kCli) + " " + flags + " --write-recipe "
+            + quoted(path("recipes/shot.zdn")));
     ASSERT_EQ(r.status, 0) << r.err;
     std::vector<std::string> names;
     Filesystem::get_directory_entries(path("recipes"), names);
@@ -400,9 +565,17 @@ TEST_F(PluginTest, WriteRecipeRoundTrip)
 
     r = zdenoise(flags + " -o " + quoted(path("cli.exr")));
     ASSERT_EQ(r.status, 0) << r.err;
-    r = oiiotool(quoted(path("recipes/shot.zdn")) + " -o " + quoted(path("plugin.exr")));
+    r = run(allow + host_program(kOiiotool) + " " + quoted(path("recipes/shot.zdn")) + " -o "
+            + quoted(path("plugin.exr")));
     ASSERT_EQ(r.status, 0) << r.err;
     expect_identical(path("cli.exr"), path("plugin.exr"));
+
+    // Nor one asking for more than a recipe may.
+    r = zdenoise("--in " + quoted(path("sample.exr")) + " --rmax 40 --write-recipe "
+                 + quoted(path("big.zdn")));
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("\"rmax\" is 40: more than the 32"), std::string::npos) << r.err;
+    EXPECT_FALSE(Filesystem::exists(path("big.zdn")));
 
     // A recipe may not name a recipe.
     r = zdenoise("--in " + quoted(path("recipes/shot.zdn")) + " --write-recipe "

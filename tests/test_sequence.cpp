@@ -203,6 +203,63 @@ TEST_F(Sequence, UsageErrorsAreOneLine)
 }
 
 
+TEST_F(Sequence, APatternThatMatchesNothingSaysSoUpFront)
+{
+    write_frames({ 1001, 1002 });
+    // Nuke's #### (4 digits) is 16 digits in oiiotool's convention.
+    RunResult r = zdenoise("--in " + path("noisy.####.exr") + " --albedo "
+                           + path("albedo.####.exr") + " -o " + path("out.#.exr")
+                           + " --frames 1001-1002");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_EQ(r.err, "zdenoise: error: --in '" + path("noisy.####.exr")
+                         + "' matches no file of frames 1001-1002: the first looked for is '"
+                         + path("noisy.0000000000001001.exr") + "'; '" + path("noisy.1001.exr")
+                         + "' exists: in oiiotool's convention, which zdenoise follows, # is 4 "
+                           "digits and @ one, so write '"
+                         + path("noisy.#.exr") + "' (or '" + path("noisy.%04d.exr") + "')\n");
+    EXPECT_FALSE(Filesystem::exists(path("out.1001.exr")));
+
+    // The option at fault is named; a pattern no reading matches says so.
+    r = zdenoise("--in " + path("noisy.#.exr") + " --albedo " + path("albedo.####.exr")
+                 + " -o " + path("out.#.exr") + " --frames 1001-1002");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("--albedo '" + path("albedo.####.exr") + "' matches no file"),
+              std::string::npos)
+        << r.err;
+    r = zdenoise("--in " + path("render.#.exr") + " --albedo " + path("albedo.#.exr") + " -o "
+                 + path("out.#.exr") + " --frames 1001-1002");
+    EXPECT_EQ(r.err, "zdenoise: error: --in '" + path("render.#.exr")
+                         + "' matches no file of frames 1001-1002: the first looked for is '"
+                         + path("render.1001.exr") + "'\n");
+
+    // Unpadded numbers: # read as one digit is oiiotool's @.
+    write_frames({ 7 }, "%d");
+    r = zdenoise("--in " + path("noisy.#.exr") + " --albedo " + path("albedo.@.exr") + " -o "
+                 + path("out.#.exr") + " --frames 7");
+    EXPECT_NE(r.err.find("'" + path("noisy.7.exr") + "' exists: in oiiotool's convention, "
+                         "which zdenoise follows, # is 4 digits and @ one, so write '"
+                         + path("noisy.@.exr") + "' (or '" + path("noisy.%01d.exr") + "')"),
+              std::string::npos)
+        << r.err;
+    // A frame list in the name stays in the pattern to write.
+    r = zdenoise("--in " + path("noisy.1001-1002####.exr") + " --albedo "
+                 + path("albedo.#.exr") + " -o " + path("out.#.exr"));
+    EXPECT_NE(r.err.find("so write '" + path("noisy.1001-1002#.exr") + "'\n"), std::string::npos)
+        << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+
+    // Frames already denoised are not looked for (--skip-existing re-runs
+    // after the renders were cleaned up).
+    r = zdenoise(sequence_args() + " --frames 1001-1002");
+    ASSERT_EQ(r.status, 0) << r.err;
+    Filesystem::remove(path("noisy.1001.exr"));
+    Filesystem::remove(path("noisy.1002.exr"));
+    r = zdenoise(sequence_args() + " --frames 1001-1002 --skip-existing");
+    EXPECT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.err.find("2 frames: 0 denoised, 2 skipped"), std::string::npos) << r.err;
+}
+
+
 TEST_F(Sequence, PrintChunksSplitsTheFrameListForAFarm)
 {
     RunResult r = zdenoise(sequence_args() + " --frames 1001-1006 --print-chunks 2");

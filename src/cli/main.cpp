@@ -77,22 +77,12 @@ parse_int(const std::string& opt, const std::string& value)
 uint64_t
 parse_size(const std::string& opt, const std::string& value)
 {
-    std::string digits = value;
-    double scale       = 1.0;
-    const std::string suffixes = "KMGT";
-    if (!digits.empty()) {
-        size_t k = suffixes.find(char(std::toupper(digits.back())));
-        if (k != std::string::npos) {
-            scale = std::ldexp(1.0, 10 * int(k + 1));
-            digits.pop_back();
-        }
-    }
-    const double v = parse_number(opt, digits) * scale;
-    if (v < 1.0 || v > 1.8e19)
+    uint64_t v = 0;
+    if (!job::parse_size(value, v))
         fail(format("{} needs a size such as 512M or 8G, got '{}'", opt,
                     value),
              kExitUsage);
-    return uint64_t(v);
+    return v;
 }
 
 /// Set `option` of `c` from its command-line value, read by `value`.

@@ -255,6 +255,20 @@ run_batch(const job::Job& job, const std::string& output,
         return 0;
     }
 
+    // A pattern that names no file of the frames to denoise (those whose
+    // output is missing, with --skip-existing) fails up front, not frame
+    // by frame.
+    if (patterned_in) {
+        std::vector<int> wanted;
+        for (int f : frames)
+            if (!o.skip_existing
+                || !Filesystem::exists(job::frame_path(output, f)))
+                wanted.push_back(f);
+        error = job::unmatched_frame_pattern(job, wanted);
+        if (!error.empty())
+            return kExitError;
+    }
+
     std::vector<FrameRecord> records;
     if (sequence) {
         for (int f : frames) {

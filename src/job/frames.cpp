@@ -12,6 +12,8 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
 
+#include "options.h"
+
 namespace zdenoise {
 namespace job {
 
@@ -219,6 +221,93 @@ job_for_frame(const Job& job, int frame)
         if ((j.*m).given)
             (j.*m).path = frame_path((j.*m).path, frame);
     return j;
+}
+
+namespace {
+
+/// The first of `frames` whose file `pattern` names exists, or "".
+std::string
+first_existing(const std::string& pattern, const std::vector<int>& frames)
+{
+    for (int f : frames) {
+        const std::string name = frame_path(pattern, f);
+        if (Filesystem::exists(name))
+            return name;
+    }
+    return "";
+}
+
+
+/// Why `pattern` (the value of `flag`) matches no file of `frames`, or ""
+/// when it matches one (or is no pattern).
+std::string
+unmatched(const char* flag, const std::string& pattern,
+          const std::vector<int>& frames)
+{
+    std::string frames_in_name;
+    if (frames.empty() || !has_frame_pattern(pattern, &frames_in_name)
+        || !first_existing(pattern, frames).empty())
+        return "";
+    std::string list = frame_list_text(frames);
+    if (list.size() > 40)
+        list = list.substr(0, 37) + "...";
+    std::string message = Strutil::fmt::format(
+        "{} '{}' matches no file of frames {}: the first looked for is '{}'",
+        flag, pattern, list, frame_path(pattern, frames.front()));
+    // OIIO reads the first run of # and @ (after any frame list) as the
+    // frame number: # 4 digits, @ one. Read each # as one digit instead.
+    const size_t begin = pattern.find_first_of("#@");
+    const size_t end   = pattern.find_first_not_of("#@", begin);
+    const size_t count = (end == std::string::npos ? pattern.size() : end)
+                         - begin;
+    const std::string run = pattern.substr(begin, count);
+    if (run.find('#') == std::string::npos)
+        return message;
+    auto with = [&](const std::string& spelling) {
+        return pattern.substr(0, begin) + spelling
+               + pattern.substr(begin + count);
+    };
+    const std::string digits = std::string(count, '@');
+    const std::string found  = first_existing(with(digits), frames);
+    if (found.empty())
+        return message;
+    const std::string write = with(count % 4 == 0 ? std::string(count / 4, '#')
+                                                  : digits);
+    return message
+           + Strutil::fmt::format(
+               "; '{}' exists: in oiiotool's convention, which zdenoise "
+               "follows, # is 4 digits and @ one, so write '{}'{}",
+               found, write,
+               frames_in_name.empty()
+                   ? Strutil::fmt::format(" (or '{}')",
+                                          with(Strutil::fmt::format(
+                                              "%0{}d", count)))
+                   : std::string());
+}
+
+}  // namespace
+
+
+std::string
+unmatched_frame_pattern(const Job& job, const std::vector<int>& frames)
+{
+    Command command;
+    command.job = job;
+    for (const Option& o : options()) {
+        std::string why;
+        if (o.kind == Kind::Input) {
+            const InputArg& arg = std::get<Field<InputArg>>(o.field)(command);
+            if (arg.given)
+                why = unmatched(o.flag, arg.path, frames);
+        } else if (o.kind == Kind::Halves && job.half_a.given) {
+            why = unmatched(o.flag, job.half_a.path, frames);
+            if (why.empty())
+                why = unmatched(o.flag, job.half_b.path, frames);
+        }
+        if (!why.empty())
+            return why;
+    }
+    return "";
 }
 
 }  // namespace job

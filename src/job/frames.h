@@ -51,6 +51,15 @@ frame_chunks(const std::vector<int>& frames, int chunk_size);
 bool
 job_has_frame_pattern(const Job& job, std::string* frames_in_name = nullptr);
 
+/// "" when every input of `job` that names a frame pattern names an
+/// existing file for at least one of `frames`; else a one-line message
+/// naming the option, the pattern and the first file looked for. When the
+/// pattern's `#` read as one digit each (Nuke's and Houdini's convention,
+/// where `####` is 4 digits, not oiiotool's 16) would have matched, it
+/// says which pattern to write.
+std::string
+unmatched_frame_pattern(const Job& job, const std::vector<int>& frames);
+
 /// `job` for one frame: the frame wildcard of every input path replaced.
 Job
 job_for_frame(const Job& job, int frame);

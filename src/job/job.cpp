@@ -157,6 +157,12 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
                     "--albedo FILE or --aux FILE",
                     j.in.path));
     p.noisy = in.window();
+    const uint64_t pixels = uint64_t(p.noisy.width()) * uint64_t(p.noisy.height());
+    if (j.max_pixels && pixels > j.max_pixels)
+        fail(format("'{}' is {}x{}, {} pixels: more than the {} a recipe may "
+                    "denoise (ZDENOISE_RECIPE_LIMITS=pixels=N allows more)",
+                    j.in.path, p.noisy.width(), p.noisy.height(), pixels,
+                    j.max_pixels));
     p.roles = select_roles(files, j, p.layered);
     if (!p.layered && !remodulation.empty()) {
         p.roles.remodulation.selection

@@ -79,6 +79,10 @@ struct Job {
     /// Largest memory (bytes) a frame may need; a larger frame is refused
     /// before its pixels are read. 0: default_memory_limit().
     uint64_t mem_limit = 0;
+    /// Largest image (width x height of --in) the job may denoise,
+    /// refused before its pixels are read; 0: any. Recipes set it
+    /// (ZDENOISE_RECIPE_LIMITS, recipe.h); the command line does not.
+    uint64_t max_pixels = 0;
     /// Rows per strip (--tile); 0: automatic (the whole frame when it is
     /// small, else strips as tall as the memory budget allows).
     int tile_rows = 0;

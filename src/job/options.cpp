@@ -3,6 +3,7 @@
 
 #include "options.h"
 
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -469,6 +470,26 @@ parse_whole(const std::string& text, int& value)
     if (!parse_real(text, v) || v != std::floor(v) || std::fabs(v) > 1e6)
         return false;
     value = int(v);
+    return true;
+}
+
+bool
+parse_size(const std::string& text, uint64_t& value)
+{
+    std::string digits = text;
+    double scale       = 1.0;
+    const std::string suffixes = "KMGT";
+    if (!digits.empty()) {
+        size_t k = suffixes.find(char(std::toupper(digits.back())));
+        if (k != std::string::npos) {
+            scale = std::ldexp(1.0, 10 * int(k + 1));
+            digits.pop_back();
+        }
+    }
+    double v = 0.0;
+    if (!parse_real(digits, v) || v * scale < 1.0 || v * scale > 1.8e19)
+        return false;
+    value = uint64_t(v * scale);
     return true;
 }
 

@@ -130,6 +130,11 @@ parse_real(const std::string& text, double& value);
 bool
 parse_whole(const std::string& text, int& value);
 
+/// Parse all of `text` as a size of at least 1 with an optional binary
+/// suffix: "1048576", "512M", "8G" (K, M, G, T: 2^10, 2^20, 2^30, 2^40).
+bool
+parse_size(const std::string& text, uint64_t& value);
+
 /// How a front end names options in its messages.
 enum class Spelling { CommandLine, Recipe };
 

@@ -5,10 +5,11 @@
 
 #include <cerrno>
 #include <cmath>
-#include <limits>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include <nlohmann/json.hpp>
 
@@ -26,6 +27,7 @@ namespace Filesystem = OIIO::Filesystem;
 namespace Strutil    = OIIO::Strutil;
 using json           = nlohmann::json;
 using OIIO::TypeDesc;
+namespace fs         = std::filesystem;
 
 namespace {
 
@@ -91,11 +93,73 @@ is_recipe_path(const std::string& path)
 }
 
 
+/// `path` made absolute with its symbolic links and `..` resolved as far
+/// as it exists (the rest lexically); empty when that fails.
+fs::path
+resolved(const fs::path& path)
+{
+    std::error_code ec;
+    fs::path absolute = fs::absolute(path, ec);
+    if (ec)
+        return {};
+    fs::path canonical = fs::weakly_canonical(absolute, ec);
+    return ec ? fs::path() : canonical;
+}
+
+
+/// Whether `path` is `folder` or lies under it (both resolved).
+bool
+inside(const fs::path& path, const fs::path& folder)
+{
+    const fs::path relative = path.lexically_relative(folder);
+    return !relative.empty() && *relative.begin() != "..";
+}
+
+
+/// The file a recipe in `folder` reads for its `key`'s path `given`: its
+/// resolved path, which must lie in the recipe's folder or in one of the
+/// folders of ZDENOISE_RECIPE_PATH (`rules`), and be a regular file when
+/// it exists (not a FIFO a reader would hang on, not a device).
+std::string
+confined(const std::string& key, const std::string& given,
+         const std::string& folder, const RecipeRules& rules)
+{
+    if (given.find('\0') != std::string::npos)
+        fail(format("\"{}\" holds a NUL character", key));
+    const fs::path home = resolved(folder.empty() ? "." : folder);
+    if (home.empty())
+        fail(format("cannot resolve the recipe's folder '{}'", folder));
+    const fs::path joined = home / given;  // an absolute `given` replaces it
+    const fs::path target = resolved(joined);
+    if (target.empty())
+        fail(format("\"{}\": cannot resolve '{}'", key, given));
+    bool allowed = inside(target, home);
+    for (const std::string& other : rules.folders)
+        allowed = allowed || inside(target, other);
+    if (!allowed) {
+        const char* why = fs::path(given).is_absolute()
+                              ? "an absolute path outside"
+                          : !inside(joined.lexically_normal(), home)
+                              ? "'..' leads out of"
+                              : "a symbolic link leads out of";
+        fail(format("\"{}\" is '{}': {} the recipe's folder '{}' (a recipe "
+                    "reads files in its folder only, or in the folders {} "
+                    "lists)",
+                    key, given, why, home.string(), kRecipePathVariable));
+    }
+    std::error_code ec;
+    const fs::file_status status = fs::status(target, ec);
+    if (fs::exists(status) && !fs::is_regular_file(status))
+        fail(format("\"{}\" is '{}': not a regular file", key, given));
+    return target.string();
+}
+
+
 /// An input: "path" or {"path": "...", "channels": "..."}; relative paths
-/// are relative to the recipe's folder.
+/// are relative to the recipe's folder, and confined() to it.
 InputArg
 parse_input(const std::string& key, const json& value,
-            const std::string& folder)
+            const std::string& folder, const RecipeRules& rules)
 {
     InputArg arg;
     arg.given = true;
@@ -127,8 +191,7 @@ parse_input(const std::string& key, const json& value,
         fail(format("\"{}\" is '{}', itself a recipe: a recipe's inputs must "
                     "be images, not recipes",
                     key, arg.path));
-    if (!folder.empty() && !Filesystem::path_is_absolute(arg.path))
-        arg.path = folder + "/" + arg.path;
+    arg.path = confined(key, arg.path, folder, rules);
     return arg;
 }
 
@@ -183,6 +246,13 @@ apply_overrides(json& recipe,
         int whole            = 0;
         if (key == "preset")
             continue;
+        // A recipe is JSON, and JSON text is UTF-8: a recipe read with such
+        // an argument could not be written back (found by fuzz_recipe).
+        try {
+            (void)json(text).dump();
+        } catch (const json::exception&) {
+            fail(format("argument '{}' is not UTF-8 text", key));
+        }
         if (key == kVersionKey || (option && !option->in_file_name))
             fail(format("argument '{}' cannot be given after the '?'; edit "
                         "the recipe",
@@ -232,20 +302,21 @@ parse_string(const std::string& key, const json& value, bool name)
 /// Set `option` of `command` from its recipe value.
 void
 parse_option(const Option& option, const json& value,
-             const std::string& folder, Command& command)
+             const std::string& folder, const RecipeRules& rules,
+             Command& command)
 {
     const std::string key = option.key;
     switch (option.kind) {
     case Kind::Input:
         std::get<Field<InputArg>>(option.field)(command)
-            = parse_input(key, value, folder);
+            = parse_input(key, value, folder, rules);
         break;
     case Kind::Halves:
         if (!value.is_array() || value.size() != 2)
             fail(format("\"halves\" must be a list of two inputs, not {}",
                         shown(value)));
-        command.job.half_a = parse_input(key, value[0], folder);
-        command.job.half_b = parse_input(key, value[1], folder);
+        command.job.half_a = parse_input(key, value[0], folder, rules);
+        command.job.half_b = parse_input(key, value[1], folder, rules);
         break;
     case Kind::Flag:
         if (!value.is_boolean())
@@ -257,9 +328,8 @@ parse_option(const Option& option, const json& value,
     case Kind::Name:
     case Kind::Path: {
         std::string text = parse_string(key, value, option.kind != Kind::Text);
-        if (option.kind == Kind::Path && !folder.empty()
-            && !Filesystem::path_is_absolute(text))
-            text = folder + "/" + text;
+        if (option.kind == Kind::Path)
+            text = confined(key, text, folder, rules);
         std::get<Field<std::string>>(option.field)(command) = text;
         break;
     }
@@ -268,6 +338,11 @@ parse_option(const Option& option, const json& value,
             fail(format("\"layers\" must be a list of "
                         "\"NAME=RADIANCE:ALBEDO[:divided][:reflected]\", not {}",
                         shown(value)));
+        if (rules.max_layers && value.size() > size_t(rules.max_layers))
+            fail(format("\"layers\" lists {} layers: more than the {} a "
+                        "recipe may ({}=layers=N allows more)",
+                        value.size(), rules.max_layers,
+                        kRecipeLimitsVariable));
         std::vector<LayerArg>& layers
             = std::get<Field<std::vector<LayerArg>>>(option.field)(command);
         for (const json& layer : value) {
@@ -309,7 +384,8 @@ parse_option(const Option& option, const json& value,
 
 Job
 parse(const std::string& text, const std::string& folder,
-      const std::map<std::string, std::string>& overrides)
+      const std::map<std::string, std::string>& overrides,
+      const RecipeRules& rules)
 {
     json recipe;
     try {
@@ -355,11 +431,17 @@ parse(const std::string& text, const std::string& folder,
         if (!option)
             fail(format("unknown key \"{}\" (known: {})", item.key(),
                         known_keys(false)));
-        parse_option(*option, item.value(), folder, command);
+        parse_option(*option, item.value(), folder, rules, command);
     }
     const std::string invalid = validate(command.job, Spelling::Recipe);
     if (!invalid.empty())
         fail(invalid);
+    if (rules.max_rmax && command.job.filter.r_max > rules.max_rmax)
+        fail(format("\"rmax\" is {}: more than the {} a recipe may ask for "
+                    "({}=rmax=N allows more)",
+                    command.job.filter.r_max, rules.max_rmax,
+                    kRecipeLimitsVariable));
+    command.job.max_pixels = rules.max_pixels;
     return command.job;
 }
 
@@ -409,6 +491,64 @@ input_json(const InputArg& arg, const std::string& folder)
 
 
 bool
+parse_recipe_rules(const char* path, const char* limits, RecipeRules& rules,
+                   std::string& error)
+{
+    rules = RecipeRules();
+    try {
+        for (const std::string& folder :
+             Strutil::splits(path ? path : "", ":")) {
+            if (folder.empty())
+                continue;
+            const fs::path canonical = resolved(folder);
+            if (!fs::path(folder).is_absolute() || canonical.empty())
+                fail(format("{}: '{}' is not an absolute folder",
+                            kRecipePathVariable, folder));
+            rules.folders.push_back(canonical.string());
+        }
+        for (const std::string& item :
+             Strutil::splits(limits ? limits : "", ",")) {
+            const std::string setting(Strutil::strip(item));
+            if (setting.empty())
+                continue;
+            const size_t eq         = setting.find('=');
+            const std::string key = Strutil::strip(setting.substr(0, eq));
+            const std::string value
+                = eq == std::string::npos
+                      ? std::string()
+                      : std::string(Strutil::strip(setting.substr(eq + 1)));
+            int whole      = 0;
+            uint64_t size  = 0;
+            const bool off = value == "0";
+            if ((key == "rmax" || key == "layers") && parse_whole(value, whole)
+                && whole >= 0)
+                (key == "rmax" ? rules.max_rmax : rules.max_layers) = whole;
+            else if (key == "pixels" && (off || parse_size(value, size)))
+                rules.max_pixels = off ? 0 : size;
+            else
+                fail(format("{}: '{}' must be rmax=N, layers=N or pixels=N "
+                            "(pixels may end in K, M or G; 0: no bound), "
+                            "joined by ','",
+                            kRecipeLimitsVariable, setting));
+        }
+    } catch (const Failure& f) {
+        error = f.message;
+        return false;
+    }
+    return true;
+}
+
+
+bool
+recipe_rules_from_environment(RecipeRules& rules, std::string& error)
+{
+    return parse_recipe_rules(std::getenv(kRecipePathVariable),
+                              std::getenv(kRecipeLimitsVariable), rules,
+                              error);
+}
+
+
+bool
 looks_like_recipe(const std::string& filename)
 {
     std::string path = filename;
@@ -428,11 +568,11 @@ looks_like_recipe(const std::string& filename)
 bool
 parse_recipe(const std::string& text, const std::string& name,
              const std::string& folder,
-             const std::map<std::string, std::string>& overrides, Job& job,
-             std::string& error)
+             const std::map<std::string, std::string>& overrides,
+             const RecipeRules& rules, Job& job, std::string& error)
 {
     try {
-        job = parse(text, folder, overrides);
+        job = parse(text, folder, overrides, rules);
         return true;
     } catch (const Failure& f) {
         error = format("recipe '{}': {}", name, f.message);
@@ -470,8 +610,13 @@ read_recipe(const std::string& filename, Job& job, std::string& error)
         error = format("recipe '{}': cannot read the file", path);
         return false;
     }
+    RecipeRules rules;
+    if (!recipe_rules_from_environment(rules, error)) {
+        error = format("recipe '{}': {}", path, error);
+        return false;
+    }
     return parse_recipe(text, path, Filesystem::parent_path(path), overrides,
-                        job, error);
+                        rules, job, error);
 }
 
 
@@ -559,13 +704,31 @@ write_recipe(const Job& job, const std::string& preset,
              const std::string& path, std::string& error)
 {
     std::string text;
+    const std::string folder = Filesystem::parent_path(path);
     try {
-        text = recipe_text(job, preset, Filesystem::parent_path(path));
+        text = recipe_text(job, preset, folder);
     } catch (const Failure& f) {
         error = format("cannot write recipe '{}': {}", path, f.message);
         return false;
     } catch (const std::exception& e) {
         error = format("cannot write recipe '{}': {}", path, e.what());
+        return false;
+    }
+    // A recipe the plugin would refuse here is not written: its inputs
+    // must lie in its folder or in ZDENOISE_RECIPE_PATH.
+    RecipeRules rules;
+    std::string refused;
+    if (!recipe_rules_from_environment(rules, refused)) {
+        error = format("cannot write recipe '{}': {}", path, refused);
+        return false;
+    }
+    try {
+        parse(text, folder, {}, rules);
+    } catch (const Failure& f) {
+        error = format("cannot write recipe '{}': it would not be read: {}; "
+                       "write it in a folder that holds its inputs, or list "
+                       "their folder in {}",
+                       path, f.message, kRecipePathVariable);
         return false;
     }
     return write_text_atomically(path, text, error);

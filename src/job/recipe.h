@@ -7,8 +7,10 @@
 
 #pragma once
 
+#include <cstdint>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "job.h"
 
@@ -22,6 +24,37 @@ constexpr const char* kRecipeExtension = "zdn";
 /// recipe's "zdenoise-recipe" key.
 constexpr int kRecipeFormatVersion = 1;
 
+/// The environment variables that widen what a recipe may do
+/// (share/zdn-format.md, "Recipes from anywhere").
+constexpr const char* kRecipePathVariable   = "ZDENOISE_RECIPE_PATH";
+constexpr const char* kRecipeLimitsVariable = "ZDENOISE_RECIPE_LIMITS";
+
+/// What a recipe may read and what it may cost. A recipe reads files in
+/// its own folder only (after resolving `..` and symbolic links), or in
+/// `folders`; its filter radius, its explicit layers and its image are
+/// bounded (0: no bound).
+struct RecipeRules {
+    /// Other folders a recipe may read (canonical, absolute):
+    /// ZDENOISE_RECIPE_PATH, colon-separated.
+    std::vector<std::string> folders;
+    /// ZDENOISE_RECIPE_LIMITS, "rmax=N,layers=N,pixels=N" (each optional;
+    /// pixels may take a K, M or G suffix).
+    int max_rmax          = 32;
+    int max_layers        = 16;
+    uint64_t max_pixels   = uint64_t(64) << 20;  ///< 8192 x 8192
+};
+
+/// The rules the values of ZDENOISE_RECIPE_PATH and ZDENOISE_RECIPE_LIMITS
+/// give (null or empty: unset, the defaults). On a malformed value returns
+/// false and a one-line `error` naming the variable.
+bool
+parse_recipe_rules(const char* path, const char* limits, RecipeRules& rules,
+                   std::string& error);
+
+/// The rules of this process's environment.
+bool
+recipe_rules_from_environment(RecipeRules& rules, std::string& error);
+
 /// Does `filename` (which may carry REST-style arguments, `a.zdn?eta=0.03`)
 /// name a file that looks like a recipe: small, a JSON object with a
 /// "zdenoise-recipe" key? Reads the file but does not check the job.
@@ -30,20 +63,22 @@ looks_like_recipe(const std::string& filename);
 
 /// Read the recipe `filename` into `job`. REST-style arguments after a `?`
 /// (`shot.zdn?threads=2&eta=0.03`) override the recipe's keys of the same
-/// names. Input paths are resolved against the recipe's folder. On failure
-/// returns false and a one-line `error` naming the recipe and the problem.
-/// Never throws.
+/// names. Input paths are resolved against the recipe's folder and must
+/// stay in it (or in a folder of ZDENOISE_RECIPE_PATH); the cost bounds of
+/// ZDENOISE_RECIPE_LIMITS apply (RecipeRules). On failure returns false and
+/// a one-line `error` naming the recipe and the problem. Never throws.
 bool
 read_recipe(const std::string& filename, Job& job, std::string& error);
 
 /// Parse recipe text (`name` is used in messages; relative input paths are
-/// resolved against `folder`) with `overrides` (key -> text, as REST
-/// arguments give them) applied. Never throws.
+/// resolved against `folder`, "" the current one) with `overrides` (key ->
+/// text, as REST arguments give them) applied, under `rules`. The job's
+/// paths are the files' canonical paths. Never throws.
 bool
 parse_recipe(const std::string& text, const std::string& name,
              const std::string& folder,
-             const std::map<std::string, std::string>& overrides, Job& job,
-             std::string& error);
+             const std::map<std::string, std::string>& overrides,
+             const RecipeRules& rules, Job& job, std::string& error);
 
 /// The recipe text for `job` whose filter options started from `preset`,
 /// with input paths relative to `folder` (absolute when they are on
@@ -54,7 +89,10 @@ recipe_text(const Job& job, const std::string& preset,
             const std::string& folder);
 
 /// Write the recipe for `job` to `path` (through a temporary file; paths
-/// relative to the recipe's folder). Refuses inputs that are recipes.
+/// relative to the recipe's folder). Refuses inputs that are recipes, and a
+/// recipe that read_recipe() would refuse in this environment (an input
+/// outside the recipe's folder and ZDENOISE_RECIPE_PATH, a radius beyond
+/// ZDENOISE_RECIPE_LIMITS).
 bool
 write_recipe(const Job& job, const std::string& preset,
              const std::string& path, std::string& error);
