@@ -49,14 +49,7 @@ struct Failure {
 [[noreturn]] void
 fail(const std::string& message)
 {
-    std::string line;
-    for (unsigned char c : message) {
-        if (c < 0x20 || c == 0x7f)
-            line += format("\\x{:02x}", unsigned(c));
-        else
-            line += char(c);
-    }
-    throw Failure { line };
+    throw Failure { control_escaped(message) };
 }
 
 
@@ -93,65 +86,16 @@ is_recipe_path(const std::string& path)
 }
 
 
-/// `path` made absolute with its symbolic links and `..` resolved as far
-/// as it exists (the rest lexically); empty when that fails.
-fs::path
-resolved(const fs::path& path)
-{
-    std::error_code ec;
-    fs::path absolute = fs::absolute(path, ec);
-    if (ec)
-        return {};
-    fs::path canonical = fs::weakly_canonical(absolute, ec);
-    return ec ? fs::path() : canonical;
-}
-
-
-/// Whether `path` is `folder` or lies under it (both resolved).
-bool
-inside(const fs::path& path, const fs::path& folder)
-{
-    const fs::path relative = path.lexically_relative(folder);
-    return !relative.empty() && *relative.begin() != "..";
-}
-
-
-/// The file a recipe in `folder` reads for its `key`'s path `given`: its
-/// resolved path, which must lie in the recipe's folder or in one of the
-/// folders of ZDENOISE_RECIPE_PATH (`rules`), and be a regular file when
-/// it exists (not a FIFO a reader would hang on, not a device).
+/// The file a recipe in `folder` reads for `key`'s path `given`
+/// (confine_path()), or the recipe's error.
 std::string
 confined(const std::string& key, const std::string& given,
          const std::string& folder, const RecipeRules& rules)
 {
-    if (given.find('\0') != std::string::npos)
-        fail(format("\"{}\" holds a NUL character", key));
-    const fs::path home = resolved(folder.empty() ? "." : folder);
-    if (home.empty())
-        fail(format("cannot resolve the recipe's folder '{}'", folder));
-    const fs::path joined = home / given;  // an absolute `given` replaces it
-    const fs::path target = resolved(joined);
-    if (target.empty())
-        fail(format("\"{}\": cannot resolve '{}'", key, given));
-    bool allowed = inside(target, home);
-    for (const std::string& other : rules.folders)
-        allowed = allowed || inside(target, other);
-    if (!allowed) {
-        const char* why = fs::path(given).is_absolute()
-                              ? "an absolute path outside"
-                          : !inside(joined.lexically_normal(), home)
-                              ? "'..' leads out of"
-                              : "a symbolic link leads out of";
-        fail(format("\"{}\" is '{}': {} the recipe's folder '{}' (a recipe "
-                    "reads files in its folder only, or in the folders {} "
-                    "lists)",
-                    key, given, why, home.string(), kRecipePathVariable));
-    }
-    std::error_code ec;
-    const fs::file_status status = fs::status(target, ec);
-    if (fs::exists(status) && !fs::is_regular_file(status))
-        fail(format("\"{}\" is '{}': not a regular file", key, given));
-    return target.string();
+    std::string path, error;
+    if (!confine_path(key, given, folder, rules, path, error))
+        fail(error);
+    return path;
 }
 
 
@@ -490,62 +434,6 @@ input_json(const InputArg& arg, const std::string& folder)
 }  // namespace
 
 
-bool
-parse_recipe_rules(const char* path, const char* limits, RecipeRules& rules,
-                   std::string& error)
-{
-    rules = RecipeRules();
-    try {
-        for (const std::string& folder :
-             Strutil::splits(path ? path : "", ":")) {
-            if (folder.empty())
-                continue;
-            const fs::path canonical = resolved(folder);
-            if (!fs::path(folder).is_absolute() || canonical.empty())
-                fail(format("{}: '{}' is not an absolute folder",
-                            kRecipePathVariable, folder));
-            rules.folders.push_back(canonical.string());
-        }
-        for (const std::string& item :
-             Strutil::splits(limits ? limits : "", ",")) {
-            const std::string setting(Strutil::strip(item));
-            if (setting.empty())
-                continue;
-            const size_t eq         = setting.find('=');
-            const std::string key = Strutil::strip(setting.substr(0, eq));
-            const std::string value
-                = eq == std::string::npos
-                      ? std::string()
-                      : std::string(Strutil::strip(setting.substr(eq + 1)));
-            int whole      = 0;
-            uint64_t size  = 0;
-            const bool off = value == "0";
-            if ((key == "rmax" || key == "layers") && parse_whole(value, whole)
-                && whole >= 0)
-                (key == "rmax" ? rules.max_rmax : rules.max_layers) = whole;
-            else if (key == "pixels" && (off || parse_size(value, size)))
-                rules.max_pixels = off ? 0 : size;
-            else
-                fail(format("{}: '{}' must be rmax=N, layers=N or pixels=N "
-                            "(pixels may end in K, M or G; 0: no bound), "
-                            "joined by ','",
-                            kRecipeLimitsVariable, setting));
-        }
-    } catch (const Failure& f) {
-        error = f.message;
-        return false;
-    }
-    return true;
-}
-
-
-bool
-recipe_rules_from_environment(RecipeRules& rules, std::string& error)
-{
-    return parse_recipe_rules(std::getenv(kRecipePathVariable),
-                              std::getenv(kRecipeLimitsVariable), rules,
-                              error);
-}
 
 
 bool

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "job.h"
+#include "recipe_rules.h"
 
 namespace zdenoise {
 namespace job {
@@ -23,37 +24,6 @@ constexpr const char* kRecipeExtension = "zdn";
 /// The version of the format this code reads and writes: the value of the
 /// recipe's "zdenoise-recipe" key.
 constexpr int kRecipeFormatVersion = 1;
-
-/// The environment variables that widen what a recipe may do
-/// (share/zdn-format.md, "Recipes from anywhere").
-constexpr const char* kRecipePathVariable   = "ZDENOISE_RECIPE_PATH";
-constexpr const char* kRecipeLimitsVariable = "ZDENOISE_RECIPE_LIMITS";
-
-/// What a recipe may read and what it may cost. A recipe reads files in
-/// its own folder only (after resolving `..` and symbolic links), or in
-/// `folders`; its filter radius, its explicit layers and its image are
-/// bounded (0: no bound).
-struct RecipeRules {
-    /// Other folders a recipe may read (canonical, absolute):
-    /// ZDENOISE_RECIPE_PATH, colon-separated.
-    std::vector<std::string> folders;
-    /// ZDENOISE_RECIPE_LIMITS, "rmax=N,layers=N,pixels=N" (each optional;
-    /// pixels may take a K, M or G suffix).
-    int max_rmax          = 32;
-    int max_layers        = 16;
-    uint64_t max_pixels   = uint64_t(64) << 20;  ///< 8192 x 8192
-};
-
-/// The rules the values of ZDENOISE_RECIPE_PATH and ZDENOISE_RECIPE_LIMITS
-/// give (null or empty: unset, the defaults). On a malformed value returns
-/// false and a one-line `error` naming the variable.
-bool
-parse_recipe_rules(const char* path, const char* limits, RecipeRules& rules,
-                   std::string& error);
-
-/// The rules of this process's environment.
-bool
-recipe_rules_from_environment(RecipeRules& rules, std::string& error);
 
 /// Does `filename` (which may carry REST-style arguments, `a.zdn?eta=0.03`)
 /// name a file that looks like a recipe: small, a JSON object with a
