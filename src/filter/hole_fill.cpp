@@ -18,7 +18,7 @@ namespace detail {
 
 bool
 hole_light(const FilterInputs& in, const FilterOptions& opt, int x, int y,
-           int c, float& light)
+           float light[3])
 {
     const int R      = hole_fill_radius(opt);
     const ROI& image = in.image;
@@ -31,7 +31,9 @@ hole_light(const FilterInputs& in, const FilterOptions& opt, int x, int y,
     // The weighted plane of section 5 through the light around the hole,
     // evaluated at (x, y): a hole in a gradient of light takes the gradient.
     FitMoments m;
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    double lo[3], hi[3];
+    std::fill(lo, lo + 3, std::numeric_limits<double>::infinity());
+    std::fill(hi, hi + 3, -std::numeric_limits<double>::infinity());
     for (int yq = ya; yq <= yb; ++yq) {
         guide.row(xa, yq, xb - xa + 1, g.data());
         for (int xq = xa; xq <= xb; ++xq) {
@@ -45,20 +47,23 @@ hole_light(const FilterInputs& in, const FilterOptions& opt, int x, int y,
             const double k[6] = { 1.0, u, v, u * u, u * v, v * v };
             for (int j = 0; j < 6; ++j)
                 m.s[j] += w * k[j];
-            const double zq = in.zfit[c][i];
-            m.t[c][0] += w * zq;
-            m.t[c][1] += w * zq * u;
-            m.t[c][2] += w * zq * v;
+            for (int c = 0; c < 3; ++c) {
+                const double zq = in.zfit[c][i];
+                m.t[c][0] += w * zq;
+                m.t[c][1] += w * zq * u;
+                m.t[c][2] += w * zq * v;
+                lo[c] = std::min(lo[c], zq);
+                hi[c] = std::max(hi[c], zq);
+            }
             m.count += 1;
-            lo = std::min(lo, zq);
-            hi = std::max(hi, zq);
         }
     }
     const Plane p = solve(m);
     if (!p.present)
         return false;
     // Within the light it was fitted to: no invented light.
-    light = float(std::min(std::max(p.c[c], lo), hi));
+    for (int c = 0; c < 3; ++c)
+        light[c] = float(std::min(std::max(p.c[c], lo[c]), hi[c]));
     return true;
 }
 

@@ -20,13 +20,13 @@ hole_fill_radius(const FilterOptions& opt)
     return 2 * opt.r_max;
 }
 
-/// The light at receiver (x, y), channel c, from the fit points within
-/// hole_fill_radius(): the plane fitted to their z with the weights
+/// The light at receiver (x, y), per RGB channel, from the fit points
+/// within hole_fill_radius(): the plane fitted to their z with the weights
 /// g(q; (x, y)) exp(-d^2 / r_max^2), at (x, y), within the range of those
 /// z. False when no fit point of its surface is that near.
 bool
 hole_light(const FilterInputs& in, const FilterOptions& opt, int x, int y,
-           int c, float& light);
+           float light[3]);
 
 }  // namespace detail
 }  // namespace zdenoise

@@ -73,19 +73,24 @@ robust_variance(const FilterInputs& in, const RawVariance& e, int nthreads)
                 var[i] = 0.0f;
                 continue;
             }
-            // Median; for an even count, the mean of the middle two.
-            std::sort(window, window + n);
-            const float med = (n & 1) ? window[n / 2]
-                                      : 0.5f
-                                            * (window[n / 2 - 1]
-                                               + window[n / 2]);
-            var[i] = med / kChi2Median;
+            var[i] = median(window, n) / kChi2Median;
         }
     });
     return var;
 }
 
 }  // namespace
+
+
+float
+median(float* v, int n)
+{
+    std::nth_element(v, v + n / 2, v + n);
+    const float upper = v[n / 2];
+    if (n & 1)
+        return upper;
+    return 0.5f * (*std::max_element(v, v + n / 2) + upper);
+}
 
 
 /// Are two pixels on the same surface for the noise estimate: same (plain

@@ -47,6 +47,11 @@ RawVariance
 raw_variance(const FilterInputs& in, const Guides& guides,
              const std::vector<float>& albedo, float albedo_eps, int nthreads);
 
+/// The median of the n > 0 values at v (the mean of the middle two for an
+/// even n); reorders them. The noise estimate's and the outlier test's.
+float
+median(float* v, int n);
+
 /// Are pixels a and b on the same surface for the noise estimate: the same
 /// (plain or primary Cryptomatte) id, and close normals (cosine > 0.9) when
 /// normals are given.

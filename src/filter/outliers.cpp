@@ -31,17 +31,6 @@ normal_quantile(double p)
     return 0.5 * (lo + hi);
 }
 
-/// Median of n values (the mean of the middle two for an even n).
-float
-median(float* v, int n)
-{
-    std::nth_element(v, v + n / 2, v + n);
-    const float upper = v[n / 2];
-    if (n & 1)
-        return upper;
-    return 0.5f * (*std::max_element(v, v + n / 2) + upper);
-}
-
 }  // namespace
 
 

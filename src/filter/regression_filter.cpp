@@ -154,6 +154,8 @@ normalise_output(ImageBuf& dst, const ImageBuf& quotient,
                              + size_t(x - roi.xbegin);
             const uint8_t cl = in.cls[i];
             bool passed      = false;
+            float hole[3];
+            int hole_found   = -1;  ///< not looked for yet; then 0 or 1
             for (int ch = 0; ch < 3; ++ch) {
                 float& v = out[o * nch + ch];
                 if ((cl & (kReceiveR << ch)) && splats.wsum[o] > 0.0) {
@@ -162,10 +164,10 @@ normalise_output(ImageBuf& dst, const ImageBuf& quotient,
                 } else {
                     passed = true;
                     // A hole: no window reached a non-finite value.
-                    if (!std::isfinite(v)
-                        && !((cl & (kReceiveR << ch))
-                             && hole_light(in, opt, x, int(y), ch, v)))
-                        v = 0.0f;
+                    if (!std::isfinite(v) && (cl & (kReceiveR << ch)) && hole_found < 0)
+                        hole_found = hole_light(in, opt, x, int(y), hole);
+                    if (!std::isfinite(v))
+                        v = (cl & (kReceiveR << ch)) && hole_found > 0 ? hole[ch] : 0.0f;
                 }
             }
             pt += passed;
