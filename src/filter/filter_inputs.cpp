@@ -19,9 +19,10 @@ using namespace OIIO;
 
 namespace {
 
-/// The planes the fit reads, padded for the row kernels (kPlanePadding):
-/// z of the fit points per channel, their fit prior exp(-sigma) where
-/// sigma <= sigma_good, and zl, vs, sigma, cls padded likewise.
+/// The planes the fit and the splat read, padded for the row kernels
+/// (kPlanePadding): z and the radiance of the fit points per channel, the
+/// receivers' 1 / (La + eps), the fit prior exp(-sigma) where sigma <=
+/// sigma_good, and zl, vs, sigma, cls padded likewise.
 void
 prepare_fit_planes(FilterInputs& in, const std::vector<float>& z,
                    const std::vector<float>& albedo, float albedo_eps,
