@@ -12,6 +12,7 @@
 #include <zdenoise/version.h>
 
 #include "cli_test.h"
+#include "../src/job/options.h"
 
 using namespace OIIO;
 using namespace cli_test;
@@ -199,4 +200,21 @@ TEST_F(CliTest, VersionAndHelp)
                              "--halves", "--threads", "--eta", "--rmax", ":ch=", "--mode",
                              "--layer", "--residual", "--aovs", "-d TYPE" })
         EXPECT_NE(r.out.find(opt), std::string::npos) << "help lacks " << opt;
+    // Every option of the one table is in the help a user reads (the help
+    // is a template that names where each goes: one left out is invisible).
+    auto names = [&](const std::string& flag) {
+        for (size_t at = r.out.find(flag); at != std::string::npos;
+             at = r.out.find(flag, at + 1)) {
+            const char next = at + flag.size() < r.out.size() ? r.out[at + flag.size()] : '\n';
+            if (next == ' ' || next == ',' || next == '\n')
+                return true;
+        }
+        return false;
+    };
+    // (An option without help text is an alias, as -h of --help.)
+    for (const zdenoise::job::Option& o : zdenoise::job::options()) {
+        if (o.flag && o.help) {
+            EXPECT_TRUE(names(o.flag)) << "help lacks " << o.flag;
+        }
+    }
 }

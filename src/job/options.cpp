@@ -111,6 +111,7 @@ Filter parameters (docs/FILTER.md):
 {--radius-growth}
 {--stride}
 {--stride-edges}
+{--outlier-spread}
 
 Frame sequences (oiiotool's conventions) and batches:
 {--frames}
