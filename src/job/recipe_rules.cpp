@@ -119,7 +119,13 @@ parse_recipe_rules(const char* path, const char* limits, RecipeRules& rules,
             if (!fs::path(folder).is_absolute() || canonical.empty())
                 return refuse(error, format("{}: '{}' is not an absolute folder",
                             kRecipePathVariable, folder));
-            rules.folders.push_back(canonical.string());
+            // A folder as one spelling: "/studio/" is "/studio" (a trailing
+            // separator, kept by weakly_canonical for a folder that does not
+            // exist, would make it a different string; found by fuzz_recipe).
+            fs::path folder_path = canonical;
+            if (!folder_path.has_filename() && folder_path != folder_path.root_path())
+                folder_path = folder_path.parent_path();
+            rules.folders.push_back(folder_path.string());
         }
         for (const std::string& item :
              Strutil::splits(limits ? limits : "", ",")) {
