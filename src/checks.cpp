@@ -5,6 +5,8 @@
 
 #include "internal.h"
 
+#include <zdenoise/zdenoise.h>
+
 #include <OpenImageIO/imagebufalgo_util.h>
 
 namespace zdenoise {
@@ -88,5 +90,45 @@ prepare_dst(ImageBuf& dst, const ImageBuf& src, ROI& roi, const char* opname)
     return true;
 }
 
+
+bool
+prepare_diagnostics(ImageBuf& dst, ImageBuf& maps, const ROI& roi,
+                    const ROI& frame, const char* opname)
+{
+    const std::vector<std::string>& names = diagnostic_channels();
+    const int n = int(names.size());
+    if (!maps.initialized()) {
+        ROI data    = roi;
+        data.chbegin = 0;
+        data.chend   = n;
+        OIIO::ImageSpec spec(data, OIIO::TypeFloat);
+        spec.full_x      = frame.xbegin;
+        spec.full_y      = frame.ybegin;
+        spec.full_width  = frame.width();
+        spec.full_height = frame.height();
+        spec.channelnames = names;
+        maps.reset(spec);
+        return true;
+    }
+    if (maps.nchannels() < n || !maps.roi().contains(roi.xbegin, roi.ybegin)
+        || !maps.roi().contains(roi.xend - 1, roi.yend - 1)) {
+        dst.errorfmt("{}: the diagnostics image needs {} channels over the "
+                     "output's pixels",
+                     opname, n);
+        return false;
+    }
+    return true;
+}
+
 }  // namespace detail
+
+
+const std::vector<std::string>&
+diagnostic_channels()
+{
+    static const std::vector<std::string> names = { "radius", "stop", "noise",
+                                                    "error" };
+    return names;
+}
+
 }  // namespace zdenoise

@@ -77,6 +77,14 @@ returned_image(const char* opname, Op&& op)
 bool
 prepare_dst(ImageBuf& dst, const ImageBuf& src, ROI& roi, const char* opname);
 
+/// Make `maps` ready for FilterOptions::diagnostics over roi: allocated
+/// (float, diagnostic_channels(), data window roi, display window frame)
+/// when uninitialised, else checked to hold roi and the channels (the
+/// error goes to dst).
+bool
+prepare_diagnostics(ImageBuf& dst, ImageBuf& maps, const ROI& roi,
+                    const ROI& frame, const char* opname);
+
 /// The albedo that remodulates a quotient demodulated by `albedo` when a
 /// cleaner `remodulation_albedo` is given (zdenoise.h's remodulate() with
 /// two albedos), over roi into `dst` (float, R,G,B): the clean one where

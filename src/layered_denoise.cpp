@@ -6,6 +6,8 @@
 
 #include <zdenoise/zdenoise.h>
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include <OpenImageIO/imagebufalgo.h>
@@ -109,6 +111,76 @@ denoise_layer(ImageBuf& dst, const Layer& layer, const Guides& shared,
     return true;
 }
 
+
+/// The diagnostics of a layered denoise (FilterOptions::diagnostics): each
+/// filtered layer's maps combined with weight w = its light (luminance of
+/// its contribution, at least 1e-20 so that layers without light still
+/// count): radius a weighted mean, noise and error the relative deviation
+/// of a sum of independent parts, sqrt(sum (w e)^2) / sum w, stop the
+/// reason of the layer with the most light.
+class CombinedDiagnostics {
+public:
+    explicit CombinedDiagnostics(const ROI& roi)
+        : m_roi(roi)
+        , m_sums(kSums * size_t(roi.width()) * size_t(roi.height()), 0.0)
+    {
+    }
+
+    bool add(const ImageBuf& maps, const ImageBuf& contribution)
+    {
+        const size_t npix = size_t(m_roi.width()) * size_t(m_roi.height());
+        std::vector<float> m(4 * npix), rgb(3 * npix);
+        ROI r4 = m_roi, r3 = m_roi;
+        r4.chbegin = r3.chbegin = 0;
+        r4.chend = 4;
+        r3.chend = 3;
+        if (!maps.get_pixels(r4, TypeFloat, m.data())
+            || !contribution.get_pixels(r3, TypeFloat, rgb.data()))
+            return false;
+        for (size_t p = 0; p < npix; ++p) {
+            const float* c = &rgb[3 * p];
+            const double light = 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+            const double w = std::max(std::isfinite(light) ? light : 0.0, 1e-20);
+            double* s      = &m_sums[kSums * p];
+            s[0] += w;
+            s[1] += w * double(m[4 * p]);
+            s[2] += (w * double(m[4 * p + 2])) * (w * double(m[4 * p + 2]));
+            s[3] += (w * double(m[4 * p + 3])) * (w * double(m[4 * p + 3]));
+            if (w > s[4]) {
+                s[4] = w;
+                s[5] = double(m[4 * p + 1]);
+            }
+        }
+        return true;
+    }
+
+    bool write(ImageBuf& maps) const
+    {
+        const size_t npix = size_t(m_roi.width()) * size_t(m_roi.height());
+        std::vector<float> m(4 * npix, 0.0f);
+        for (size_t p = 0; p < npix; ++p) {
+            const double* s = &m_sums[kSums * p];
+            if (!(s[0] > 0.0))
+                continue;
+            m[4 * p]     = float(s[1] / s[0]);
+            m[4 * p + 1] = float(s[5]);
+            m[4 * p + 2] = float(std::sqrt(s[2]) / s[0]);
+            m[4 * p + 3] = float(std::sqrt(s[3]) / s[0]);
+        }
+        ROI r4    = m_roi;
+        r4.chbegin = 0;
+        r4.chend   = 4;
+        return maps.set_pixels(r4, TypeFloat, m.data());
+    }
+
+private:
+    /// Per pixel: sum w, sum w radius, sum (w noise)^2, sum (w error)^2,
+    /// the largest w and its layer's stop code.
+    static constexpr size_t kSums = 6;
+    ROI m_roi;
+    std::vector<double> m_sums;
+};
+
 }  // namespace
 
 
@@ -178,13 +250,29 @@ layered_denoise(ImageBuf& dst, const std::vector<Layer>& layers,
                                        nthreads)
                  : !ImageBufAlgo::zero(dst, roi, nthreads))
         return false;
+    // Each layer's maps go to an image of its own, combined at the end.
+    if (options.diagnostics
+        && !detail::prepare_diagnostics(dst, *options.diagnostics, roi,
+                                        opt.frame, opname))
+        return false;
+    CombinedDiagnostics combined(options.diagnostics ? roi : ROI(0, 0, 0, 0));
     for (const Layer& layer : layers) {
-        ImageBuf out;
+        ImageBuf out, layer_maps;
         const ImageBuf* contribution = nullptr;
         FilterStats layer_stats;
-        if (!denoise_layer(dst, layer, guides, opt, &layer_stats, roi,
+        FilterOptions layer_opt = opt;
+        layer_opt.diagnostics   = options.diagnostics && layer.filter
+                                      ? &layer_maps
+                                      : nullptr;
+        if (!denoise_layer(dst, layer, guides, layer_opt, &layer_stats, roi,
                            nthreads, out, contribution))
             return false;
+        if (layer_opt.diagnostics
+            && !combined.add(layer_maps, *contribution)) {
+            dst.errorfmt("{}: layer '{}': diagnostics: {}", opname,
+                         layer.name, layer_maps.geterror());
+            return false;
+        }
         if (!ImageBufAlgo::add(dst, dst, *contribution, roi, nthreads))
             return false;
         if (layer.denoised
@@ -198,6 +286,11 @@ layered_denoise(ImageBuf& dst, const std::vector<Layer>& layers,
             *layer.stats = layer_stats;
         if (stats && layer.filter)
             stats->merge(layer_stats);
+    }
+    if (options.diagnostics && !combined.write(*options.diagnostics)) {
+        dst.errorfmt("{}: diagnostics: {}", opname,
+                     options.diagnostics->geterror());
+        return false;
     }
     return true;
 }

@@ -113,7 +113,7 @@ public:
     {
     }
 
-    RefImage run(RefStats* stats);
+    RefImage run(RefStats* stats, RefImage* diagnostics);
 
 private:
     RefImage z;               // the quotient the fits read (outliers capped)
@@ -707,7 +707,7 @@ Filter::split_outliers()
 }
 
 RefImage
-Filter::run(RefStats* stats)
+Filter::run(RefStats* stats, RefImage* diagnostics)
 {
     // ---- section 2: pixel classes ----
     surface_.assign(size_t(w) * h, 0);
@@ -743,11 +743,15 @@ Filter::run(RefStats* stats)
 
     // ---- sections 5 and 6: centres in raster order (or strided) ----
     std::vector<double> acc(size_t(w) * h * 3, 0.0), wsum(size_t(w) * h, 0.0);
+    // Diagnostics (zdenoise.h, diagnostic_channels()): per pixel the sums
+    // of s R, s eta and s per stop code 1-3.
+    std::vector<double> diag(size_t(w) * h * 5, 0.0);
     double radius_sum = 0.0;
     // One centre: its window grown and splatted; whether an edge stopped it.
     auto centre = [&](int x0, int y0) {
         ++st.windows;
         bool edge = false;
+        int code  = 0;
         Window fin;
         // Radii r_min, then max(R + 1, floor(R * radius_growth)) up
         // to r_max; an edge steps back to the radius tried before.
@@ -758,16 +762,19 @@ Filter::run(RefStats* stats)
                 fin = (R > opt.r_min) ? window(x0, y0, before) : W;
                 ++st.stop_edge;
                 edge = true;
+                code = 3;
                 break;
             }
             if (W.eta <= double(opt.eta_target)) {
                 fin = W;
                 ++st.stop_quality;
+                code = 1;
                 break;
             }
             if (R == opt.r_max) {
                 fin = W;
                 ++st.stop_size;
+                code = 2;
                 break;
             }
             before = R;
@@ -827,6 +834,10 @@ Filter::run(RefStats* stats)
                     acc[idx(xq, yq) * 3 + c] += s * A;
                 }
                 wsum[idx(xq, yq)] += s;
+                double* d = &diag[idx(xq, yq) * 5];
+                d[0] += s * R;
+                d[1] += s * fin.eta;
+                d[1 + code] += s;
             }
         return edge;
     };
@@ -947,6 +958,25 @@ Filter::run(RefStats* stats)
                 ++st.passthrough_pixels;
         }
 
+    if (diagnostics) {
+        *diagnostics = RefImage(w, h, 4, 0.0f);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const double* d = &diag[idx(x, y) * 5];
+                const double ws = wsum[idx(x, y)];
+                if (fitpt(x, y))
+                    diagnostics->at(x, y, 2) = float(sigma(x, y));
+                if (!(ws > 0.0))
+                    continue;
+                int code = 1;  // the most splat weight; ties to the lower
+                for (int k = 2; k <= 3; ++k)
+                    if (d[1 + k] > d[1 + code])
+                        code = k;
+                diagnostics->at(x, y, 0) = float(d[0] / ws);
+                diagnostics->at(x, y, 1) = float(code);
+                diagnostics->at(x, y, 3) = float(d[1] / ws);
+            }
+    }
     st.pixels      = int64_t(w) * h;
     st.mean_radius = st.windows ? radius_sum / double(st.windows) : 0.0;
     if (stats)
@@ -958,12 +988,13 @@ Filter::run(RefStats* stats)
 
 RefImage
 regression_filter(const RefImage& z, const RefImage& La, const RefGuides& guides,
-                  const FilterOptions& opt, RefStats* stats)
+                  const FilterOptions& opt, RefStats* stats,
+                  RefImage* diagnostics)
 {
     if (z.nch < 3 || La.nch < 3 || La.w != z.w || La.h != z.h)
         throw std::invalid_argument("regression_filter: bad inputs");
     Filter f(z, La, guides, opt);
-    return f.run(stats);
+    return f.run(stats, diagnostics);
 }
 
 RefImage

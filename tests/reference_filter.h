@@ -74,10 +74,13 @@ RefImage remodulate(const RefImage& z, const RefImage& La, float albedo_eps);
 
 /// Sections 2-7: the whole regression filter on the quotient z.
 /// Uses only the filter parameters of `opt` (progress is ignored).
+/// `diagnostics`, if not null, receives the maps of
+/// zdenoise::diagnostic_channels() (4 channels).
 RefImage regression_filter(const RefImage& z, const RefImage& La,
                            const RefGuides& guides,
                            const zdenoise::FilterOptions& opt,
-                           RefStats* stats = nullptr);
+                           RefStats* stats = nullptr,
+                           RefImage* diagnostics = nullptr);
 
 /// demodulate + regression_filter + remodulate.
 RefImage denoise(const RefImage& L, const RefImage& La, const RefGuides& guides,

@@ -128,6 +128,36 @@ expect_stats_match(const zdenoise::FilterStats& st,
                    "channel not given a filtered value)";
 }
 
+/// The diagnostic maps (radius, stop, noise, error) as the reference's:
+/// noise to float rounding; radius, stop and error on all but the pixels
+/// that a window whose decision sits within rounding of a threshold
+/// reaches (at most 2 %).
+void
+expect_diagnostics_match(const ImageBuf& lib, const RefImage& ref,
+                         const std::string& what)
+{
+    ASSERT_FALSE(lib.has_error()) << what << ": " << lib.geterror();
+    ASSERT_EQ(lib.nchannels(), 4) << what;
+    RefImage got = zdenoise_ref::from_imagebuf(lib);
+    ASSERT_EQ(got.w, ref.w) << what;
+    ASSERT_EQ(got.h, ref.h) << what;
+    int differ = 0, noise_bad = 0;
+    for (int y = 0; y < ref.h; ++y)
+        for (int x = 0; x < ref.w; ++x) {
+            auto rel = [&](int c) {
+                const double a = got.at(x, y, c), b = ref.at(x, y, c);
+                return std::abs(a - b) / std::max(std::abs(b), 1e-6);
+            };
+            noise_bad += rel(2) > 1e-4;
+            differ += rel(0) > 1e-4 || got.at(x, y, 1) != ref.at(x, y, 1)
+                      || rel(3) > 1e-3;
+        }
+    std::printf("  %-44s %d of %d pixels differ\n", what.c_str(), differ,
+                ref.w * ref.h);
+    EXPECT_EQ(noise_bad, 0) << what << ": the noise map";
+    EXPECT_LE(differ, ref.w * ref.h / 50) << what;
+}
+
 /// One comparison case: a scene, which guides to give, options, and an
 /// optional edit of the inputs (made before anything is run).
 zdenoise::FilterOptions
@@ -185,11 +215,18 @@ run_case(const Case& k, const ImageBuf* quotient_override = nullptr)
                      : zdenoise_ref::demodulate(L, La, k.opt.albedo_eps);
     ImageBuf zbuf = zdenoise_ref::to_imagebuf(z);
     zdenoise_ref::RefStats rs;
-    RefImage ref = zdenoise_ref::regression_filter(z, La, rg, k.opt, &rs);
+    RefImage ref_maps;
+    RefImage ref = zdenoise_ref::regression_filter(z, La, rg, k.opt, &rs,
+                                                   &ref_maps);
     zdenoise::FilterStats st;
-    ImageBuf lib = zdenoise::regression_filter(zbuf, s.albedo, g, k.opt, &st);
+    ImageBuf lib_maps;
+    zdenoise::FilterOptions with_maps = k.opt;
+    with_maps.diagnostics             = &lib_maps;
+    ImageBuf lib = zdenoise::regression_filter(zbuf, s.albedo, g, with_maps,
+                                               &st);
     expect_matches_reference(lib, ref, k.name + " [filter]");
     expect_stats_match(st, rs, k.opt, k.name + " [filter]");
+    expect_diagnostics_match(lib_maps, ref_maps, k.name + " [diagnostics]");
     if (rs.absent_windows)
         std::printf("  %-44s %lld centres with no good point (absent fit)\n",
                     k.name.c_str(), (long long)rs.absent_windows);

@@ -616,3 +616,21 @@ TEST_F(PluginTest, LayerOptionsRoundTripThroughRecipes)
     ASSERT_TRUE(plugin);
     EXPECT_GE(plugin->spec().channelindex("diff.G"), 0) << "--aovs came through the recipe";
 }
+
+
+TEST_F(PluginTest, RecipeDiagnosticsAddTheMapsAsTheCommandDoes)
+{
+    write_text("maps.zdn", sample_recipe("\"diagnostics\": true"));
+    RunResult r = zdenoise("--in " + quoted(kSample) + " -o "
+                           + quoted(path("cli.exr")) + " --diagnostics");
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = oiiotool(quoted(path("maps.zdn")) + " -o " + quoted(path("plugin.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    expect_identical(path("cli.exr"), path("plugin.exr"));
+    auto plugin = ImageInput::open(path("plugin.exr"));
+    ASSERT_TRUE(plugin);
+    const std::vector<std::string>& names = plugin->spec().channelnames;
+    for (const char* n : { "zdenoise.radius", "zdenoise.stop", "zdenoise.noise",
+                           "zdenoise.error" })
+        EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
+}

@@ -123,6 +123,16 @@ struct FilterOptions {
     /// never changes the result.
     ROI frame;
 
+    /// If not null, receives per-pixel maps of what the filter did, over
+    /// the output pixels (docs/DIAGNOSTICS.md): float channels named as
+    /// diagnostic_channels() says, allocated here when `diagnostics` is
+    /// uninitialised (data window: the output's roi), else written in
+    /// place (it must hold the roi and 4 channels). denoise() and
+    /// layered_denoise() fill it too (layers: combined over the filtered
+    /// layers, weighted by their light). Not a filter parameter: it never
+    /// changes the result.
+    ImageBuf* diagnostics = nullptr;
+
     /// The method's own defaults (docs/FILTER.md section 9: edge_k 3, value_k 2,
     /// sigma_good 1, radius_growth 1, every fit point a centre), before
     /// tuning on data.
@@ -192,6 +202,25 @@ struct FilterStats {
         return *this;
     }
 };
+
+
+/// The channels of FilterOptions::diagnostics, in order:
+///  - "radius": the final half-size of the windows that reached the pixel,
+///    their mean weighted by what each splatted there (0: none did);
+///  - "stop": why the window that splatted most there stopped growing, a
+///    StopCode (0: no window reached the pixel; it passed through);
+///  - "noise": the estimated relative noise of the input's light at the
+///    pixel, sigma = sqrt(Var) / |z| (docs/FILTER.md section 3), 0 where
+///    the pixel is no fit point;
+///  - "error": the estimated remaining relative error of the output there:
+///    the predicted relative standard deviation of the filtered light
+///    (eta of the windows that reached it, weighted as "radius"). It is
+///    what more samples would reduce: where it is high, the frame needs
+///    them. 0 where no window reached the pixel.
+ZDENOISE_API const std::vector<std::string>& diagnostic_channels();
+
+/// The values of the "stop" diagnostic channel.
+enum class StopCode : int { None = 0, Quality = 1, Size = 2, Edge = 3 };
 
 
 /// Demodulation z = L / (La + eps) per RGB channel. Channels whose albedo is

@@ -243,6 +243,13 @@ run_batch(const job::Job& job, const std::string& output,
                            output);
             return kExitUsage;
         }
+        if (!job.diagnostics_png.empty()
+            && !job::has_frame_pattern(job.diagnostics_png)) {
+            error = format("--diagnostics-png '{}' has no frame pattern: "
+                           "every frame would write it; use e.g. error.#.png",
+                           job.diagnostics_png);
+            return kExitUsage;
+        }
     } else if (!o.frames.empty() || o.print_chunks > 0) {
         error = "--frames needs a frame pattern (#, @ or %0Nd) in the input "
                 "and output names, e.g. --in shot.#.exr -o clean.#.exr";

@@ -9,6 +9,7 @@
 //   fit_centres()           every centre's window fitted and
 //                           splatted, in blocks and phases    (5, 6, 8)
 //   normalise_output()      acc / wsum, pass-through, holes   (7)
+//   write_diagnostics()     the maps of FilterOptions::diagnostics
 
 #include <zdenoise/zdenoise.h>
 
@@ -86,8 +87,13 @@ check_options(ImageBuf& dst, const FilterOptions& o)
 struct Splats {
     std::vector<double> acc, wsum;
     std::vector<double> spread;  ///< outliers' spread light, z (section 3a)
-    explicit Splats(size_t npix)
-        : acc(3 * npix, 0.0), wsum(npix, 0.0), spread(3 * npix, 0.0)
+    /// kDiagnosticSums a pixel when diagnostics are asked for, else empty.
+    std::vector<double> diagnostics;
+    Splats(size_t npix, bool with_diagnostics)
+        : acc(3 * npix, 0.0)
+        , wsum(npix, 0.0)
+        , spread(3 * npix, 0.0)
+        , diagnostics(with_diagnostics ? kDiagnosticSums * npix : 0, 0.0)
     {
     }
 };
@@ -106,7 +112,8 @@ fit_centres(const FilterInputs& in, const FilterOptions& opt, const ROI& roi,
     std::atomic<int64_t> blocks_done { 0 };
     std::mutex progress_mutex;
     auto run_block = [&](int b) {
-        WindowFitter fitter(in, opt, roi, splats.acc, splats.wsum);
+        WindowFitter fitter(in, opt, roi, splats.acc, splats.wsum,
+                            opt.diagnostics ? &splats.diagnostics : nullptr);
         fit_block(blocks, b, in, opt, roi, fitter, block_stats[size_t(b)]);
         const int64_t done = ++blocks_done;
         if (opt.progress) {
@@ -187,6 +194,47 @@ normalise_output(ImageBuf& dst, const ImageBuf& quotient,
     return true;
 }
 
+/// The maps of FilterOptions::diagnostics over `roi` (zdenoise.h,
+/// diagnostic_channels()) from the splats' sums and the noise estimate.
+bool
+write_diagnostics(ImageBuf& dst, const FilterInputs& in, const Splats& splats,
+                  ROI roi, int nthreads)
+{
+    const size_t npix = size_t(roi.width()) * size_t(roi.height());
+    std::vector<float> maps(4 * npix, 0.0f);
+    parallel_for(int64_t(roi.ybegin), int64_t(roi.yend), [&](int64_t y) {
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const size_t o = size_t(y - roi.ybegin) * size_t(roi.width())
+                             + size_t(x - roi.xbegin);
+            const double* d = &splats.diagnostics[kDiagnosticSums * o];
+            float* m        = &maps[4 * o];
+            const size_t i  = in.index(x, int(y));
+            if (in.cls[i] & kFitPoint)
+                m[2] = in.sigma[i];
+            const double w = splats.wsum[o];
+            if (!(w > 0.0))
+                continue;
+            m[0] = float(d[kSumRadius] / w);
+            m[3] = float(d[kSumEta] / w);
+            // The reason that carries most of the splat weight; ties go
+            // to the first, so the map does not depend on rounding order.
+            StopCode code = StopCode::Quality;
+            double most   = d[kSumQuality];
+            if (d[kSumSize] > most) {
+                code = StopCode::Size;
+                most = d[kSumSize];
+            }
+            if (d[kSumEdge] > most)
+                code = StopCode::Edge;
+            m[1] = float(int(code));
+        }
+    }, paropt(nthreads));
+    ROI maps_roi    = roi;
+    maps_roi.chbegin = 0;
+    maps_roi.chend   = 4;
+    return dst.set_pixels(maps_roi, TypeFloat, maps.data());
+}
+
 /// Filter the output pixels `roi` (sections 2-7), reading the inputs over
 /// roi plus the halo everything depends on. `opt.frame` is the image's data
 /// window.
@@ -200,11 +248,18 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
     if (!decode_filter_inputs(in, dst, quotient, albedo, guides, opt, region,
                               nthreads))
         return false;
-    Splats splats(size_t(roi.width()) * size_t(roi.height()));
+    Splats splats(size_t(roi.width()) * size_t(roi.height()),
+                  opt.diagnostics != nullptr);
     FilterStats tile = fit_centres(in, opt, roi, nthreads, splats);
     spread_outliers(in, opt, roi, splats.spread, nthreads);
     if (!normalise_output(dst, quotient, in, opt, splats, roi, nthreads, tile))
         return false;
+    if (opt.diagnostics
+        && !write_diagnostics(*opt.diagnostics, in, splats, roi, nthreads)) {
+        dst.errorfmt("regression_filter: could not store the diagnostics: {}",
+                     opt.diagnostics->geterror());
+        return false;
+    }
     totals.merge(tile);
     return true;
 }
@@ -269,6 +324,10 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         dst.errorfmt("{}: half buffers need both A and B", opname);
         return false;
     }
+    if (options.diagnostics
+        && !detail::prepare_diagnostics(dst, *options.diagnostics, roi,
+                                        tile_opt.frame, opname))
+        return false;
 
     // Tiles bound the working memory (about 100 bytes per pixel of a tile
     // and its halo) whatever the frame size; the result is exactly the

@@ -158,7 +158,7 @@ WindowFitter::edge_fires(const WindowFit& w) const
 
 
 void
-WindowFitter::splat(const WindowFit& w)
+WindowFitter::splat(const WindowFit& w, StopReason reason)
 {
     const int R = w.radius;
     set_spatial(R);
@@ -228,7 +228,28 @@ WindowFitter::splat(const WindowFit& w)
                     acc[ch] += double(m_splat_a[ch][size_t(q)]);
                 m_wsum[o] += double(sw);
             }
+            if (m_diagnostics)
+                add_diagnostics(w, reason, o - size_t(row.n), row.n);
         }
+    }
+}
+
+
+void
+WindowFitter::add_diagnostics(const WindowFit& w, StopReason reason,
+                              size_t first, int n)
+{
+    const int by_reason = reason == StopReason::Quality ? kSumQuality
+                          : reason == StopReason::Size  ? kSumSize
+                                                        : kSumEdge;
+    for (int q = 0; q < n; ++q) {
+        const double sw = double(m_splat_s[size_t(q)]);
+        if (!(sw > 0.0))
+            continue;
+        double* d = &(*m_diagnostics)[kDiagnosticSums * (first + size_t(q))];
+        d[kSumRadius] += sw * double(w.radius);
+        d[kSumEta] += sw * w.eta;
+        d[by_reason] += sw;
     }
 }
 
@@ -267,7 +288,7 @@ WindowFitter::process(int x0, int y0, int& radius, bool splat_window)
     }
     radius = current.radius;
     if (current.whole.present && splat_window)
-        splat(current);
+        splat(current, reason);
     return reason;
 }
 

@@ -30,6 +30,18 @@ struct WindowFit {
 
 enum class StopReason { Quality, Size, Edge };
 
+/// What the diagnostics (FilterOptions::diagnostics) sum at each output
+/// pixel, kDiagnosticSums doubles a pixel: the splat weight s of each
+/// window times its final radius and its eta, and s per stop reason.
+enum DiagnosticSum {
+    kSumRadius,
+    kSumEta,
+    kSumQuality,
+    kSumSize,
+    kSumEdge,
+    kDiagnosticSums
+};
+
 /// Grows, fits and splats the windows of the centres of a range of rows.
 /// One per block of centres: holds the per-centre scratch (guide weights of the
 /// window) so that nothing is allocated per pixel.
@@ -37,12 +49,13 @@ class WindowFitter {
 public:
     WindowFitter(const FilterInputs& in, const FilterOptions& opt,
                  const ROI& out, std::vector<double>& acc,
-                 std::vector<double>& wsum)
+                 std::vector<double>& wsum, std::vector<double>* diagnostics)
         : m_in(in)
         , m_opt(opt)
         , m_out(out)
         , m_acc(acc)
         , m_wsum(wsum)
+        , m_diagnostics(diagnostics)
         , m_guide(in, opt)
         , m_side(2 * opt.r_max + 1)
         , m_g(cache_size(), 0.0f)
@@ -100,13 +113,19 @@ private:
     /// Fit at radius R, keeping the value factors in m_value[values].
     [[gnu::noinline]] WindowFit fit(int R, int values);
     bool edge_fires(const WindowFit& w) const;
-    [[gnu::noinline]] void splat(const WindowFit& w);
+    /// Add the splat weights of the row segment just splatted (n pixels
+    /// from output index `first`) to the diagnostics' sums.
+    void add_diagnostics(const WindowFit& w, StopReason reason, size_t first,
+                         int n);
+    [[gnu::noinline]] void splat(const WindowFit& w, StopReason reason);
 
     const FilterInputs& m_in;
     const FilterOptions& m_opt;
     const ROI& m_out;
     std::vector<double>& m_acc;
     std::vector<double>& m_wsum;
+    /// kDiagnosticSums per output pixel, or null: no diagnostics.
+    std::vector<double>* m_diagnostics;
     GuideWeight m_guide;
     int m_side;
     std::vector<float> m_g;  ///< g(q; p0) over the grown window

@@ -220,6 +220,8 @@ job_for_frame(const Job& job, int frame)
     for (InputArg Job::*m : input_members())
         if ((j.*m).given)
             (j.*m).path = frame_path((j.*m).path, frame);
+    if (!j.diagnostics_png.empty())
+        j.diagnostics_png = frame_path(j.diagnostics_png, frame);
     return j;
 }
 

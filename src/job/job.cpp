@@ -18,6 +18,8 @@
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
+#include "atomic_write.h"
+#include "diagnostics_picture.h"
 #include "failure.h"
 #include "input_files.h"
 #include "layer_conventions.h"
@@ -76,6 +78,11 @@ struct Plan {
     LayersPlan layers;
     Output output;
     int around = 0;  ///< rows a strip reads above and below its own
+    /// The filter's diagnostic maps are computed (--diagnostics, or
+    /// --diagnostics-png, whose error and stop maps of the whole frame are
+    /// kept here).
+    bool maps = false;
+    ErrorPicture picture;
 };
 
 
@@ -256,6 +263,12 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
                            + (p.layers.residual_is_layer ? 8.0 : 0.0);
         cost.core_pixel += 12.0 * double(p.layers.layers.size());
     }
+    // The maps, and the filter's sums for them (5 doubles a pixel).
+    p.maps = j.diagnostics || !j.diagnostics_png.empty();
+    if (p.maps)
+        cost.core_pixel += 16.0 + 40.0 + (p.layered ? 48.0 : 0.0);
+    if (!j.diagnostics_png.empty())
+        p.picture = ErrorPicture(p.noisy);
     p.output.sink = &sink;
     p.output.set_row_types(sink.float_rows());
     add_output_costs(cost, sink, spec, p.output.pixel_bytes);
@@ -351,7 +364,9 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
         options.progress = [&](float f) {
             j.filter.progress((float(s) + f) / float(result.strips));
         };
-    ImageBuf denoised;
+    ImageBuf denoised, maps;
+    if (p.maps)
+        options.diagnostics = &maps;
     FilterStats st;
     const bool ok
         = p.layered ? layered_denoise(denoised, layers,
@@ -380,6 +395,10 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
     std::vector<const ImageBuf*> images = { &denoised };
     for (const ImageBuf& l : loaded.denoised)
         images.push_back(&l);
+    if (j.diagnostics)
+        images.push_back(&maps);  // at diagnostics_image(p.layers)
+    if (!j.diagnostics_png.empty() && !p.picture.keep(maps, strip.core))
+        fail(format("--diagnostics-png: {}", one_line(maps.geterror())));
     p.output.write(strip, files.rows(j.in.path), images, j.threads);
     result.write_seconds += write_timer();
 }
@@ -406,6 +425,10 @@ run(Job j, OutputSink& sink, JobResult& result)
         }
     Timer end_timer;
     std::string err;
+    if (!j.diagnostics_png.empty()
+        && !write_atomically(p.picture.picture(), j.diagnostics_png, err))
+        fail(format("--diagnostics-png '{}': {}", j.diagnostics_png,
+                    one_line(err)));
     if (!sink.end(err))
         throw SinkFailure { err };
     result.write_seconds += end_timer();

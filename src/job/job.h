@@ -72,6 +72,14 @@ struct Job {
     std::string residual;
     /// Also write each denoised layer as NAME.R,G,B (--aovs).
     bool write_layers = false;
+    /// Add the filter's diagnostic maps to the output as the channels
+    /// kDiagnosticsLayer.<name> of zdenoise::diagnostic_channels()
+    /// (--diagnostics; docs/DIAGNOSTICS.md).
+    bool diagnostics = false;
+    /// Also write the remaining-error map as a false-colour PNG with a
+    /// legend (--diagnostics-png; the command line's only: a recipe opened
+    /// by another program writes no files).
+    std::string diagnostics_png;
     /// Pixel type of the output channels; TypeUnknown keeps each input
     /// channel's. Cryptomatte channels are float whatever this says.
     OIIO::TypeDesc data_type = OIIO::TypeUnknown;
@@ -87,6 +95,9 @@ struct Job {
     /// small, else strips as tall as the memory budget allows).
     int tile_rows = 0;
 };
+
+/// The layer of the output that holds the diagnostic maps.
+constexpr const char* kDiagnosticsLayer = "zdenoise";
 
 struct JobResult {
     /// The output image, with its per-channel write formats and the

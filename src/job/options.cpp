@@ -86,6 +86,8 @@ Output:
 {-d}
 {--force}
 {--write-recipe}
+{--diagnostics}
+{--diagnostics-png}
 
 Colour (OpenColorIO; docs/COLOUR.md):
 {--colorconfig}
@@ -184,6 +186,16 @@ options()
         { Kind::Flag, "--no-id", "no-id", FIELD(job.no_id), "", nullptr },
         { Kind::Flag, "--aovs", "aovs", FIELD(job.write_layers), "",
           "Also write each denoised layer as NAME.R,G,B." },
+        { Kind::Flag, "--diagnostics", "diagnostics", FIELD(job.diagnostics), "",
+          "Add the filter's maps to the output: zdenoise.radius,\n"
+          "zdenoise.stop (1 quality, 2 size, 3 edge, 0 not\n"
+          "filtered), zdenoise.noise (the input's relative noise)\n"
+          "and zdenoise.error (the output's estimated remaining\n"
+          "relative error: where more samples are needed);\n"
+          "docs/DIAGNOSTICS.md." },
+        { Kind::Path, "--diagnostics-png", nullptr, FIELD(job.diagnostics_png), "FILE",
+          "Also write the remaining-error map as a false-colour\n"
+          "PNG with a legend (0.1% to 10%)." },
         { Kind::Path, "--colorconfig", "colorconfig", FIELD(job.colour.config), "FILE",
           "OCIO config (default: $OCIO, else the bundled\n"
           "share/zdenoise/ocio/config.ocio)." },

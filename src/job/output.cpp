@@ -31,7 +31,7 @@ void
 put_channels(ImageSpec& spec, std::vector<OutputChannel>& channels,
              int image, const std::vector<std::string>& names, TypeDesc type)
 {
-    for (int c = 0; c < 3; ++c) {
+    for (int c = 0; c < int(names.size()); ++c) {
         int dc = spec.channelindex(names[size_t(c)]);
         if (dc < 0) {
             spec.channelnames.push_back(names[size_t(c)]);
@@ -121,7 +121,21 @@ layout_output(const Job& j, const InputHeader& in, const Selection& radiance,
             put_channels(spec, channels, int(i) + 1,
                          { n + ".R", n + ".G", n + ".B" }, beauty_type);
         }
+    if (j.diagnostics) {
+        std::vector<std::string> maps;
+        for (const std::string& n : diagnostic_channels())
+            maps.push_back(std::string(kDiagnosticsLayer) + "." + n);
+        put_channels(spec, channels, diagnostics_image(layers), maps,
+                     TypeFloat);
+    }
     formats = write_formats(spec, channels, j.data_type);
+}
+
+
+int
+diagnostics_image(const LayersPlan& layers)
+{
+    return 1 + int(layers.layers.size());
 }
 
 

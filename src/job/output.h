@@ -33,14 +33,20 @@ struct OutputChannel {
 /// The output of job `j`: the --in file `in` with its radiance RGB (the
 /// channels `radiance` selects) replaced and, with --aovs, the denoised
 /// layers of `layers` added; each channel in its input pixel type unless
-/// -d says otherwise, Cryptomatte float. Images: 0 the denoised beauty,
-/// 1 + i layer i. `spec` is as an ImageBuf of the --in file's pixels has
+/// -d says otherwise, Cryptomatte float; with --diagnostics the maps
+/// added. Images: 0 the denoised beauty, 1 + i layer i, then the maps
+/// (diagnostics_image()). `spec` is as an ImageBuf of the --in file's pixels has
 /// it (part 0's spec, the channels and metadata of every part).
 void
 layout_output(const Job& j, const InputHeader& in, const Selection& radiance,
               const LayersPlan& layers, OIIO::ImageSpec& spec,
               std::vector<OutputChannel>& channels,
               std::vector<OIIO::TypeDesc>& formats);
+
+/// The index of the diagnostic maps (Job::diagnostics) among the denoised
+/// images: after the beauty and the layers.
+int
+diagnostics_image(const LayersPlan& layers);
 
 /// Where the output of one strip comes from and goes to.
 struct Output {
