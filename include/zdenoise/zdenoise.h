@@ -330,6 +330,32 @@ ZDENOISE_API bool remodulate(ImageBuf& dst, const ImageBuf& quotient,
                              float albedo_eps = 1e-3f, ROI roi = {},
                              int nthreads = 0);
 
+/// The albedo prefilter (docs/FILTER.md section 12): a renderer's albedo
+/// AOV of N samples per pixel is noisy where a pixel's footprint mixes
+/// albedos (the anti-aliasing of texture and object edges, the speckle of
+/// rough glossy first hits), and remodulation multiplies that noise back
+/// into the result. This makes it clean where it is noisy and leaves it
+/// exact where it is not: a non-local mean over the 7x7 around each pixel,
+/// 3x3 patches compared against the variance of a pixel mean of N samples
+/// of the albedos its 3x3 mixes.
+///
+/// @param dst      Prefiltered albedo (float when allocated here); RGB
+///                 filtered, any other channel copied; a non-finite value
+///                 passed through.
+/// @param albedo   The noisy albedo, channels 0-2. Neighbourhoods clip at
+///                 its data window: to compute part of an image exactly,
+///                 give it over that part widened by albedo_prefilter_halo()
+///                 (clipped to the image).
+/// @param samples  The samples per pixel it was rendered with (>= 1).
+ZDENOISE_API bool prefilter_albedo(ImageBuf& dst, const ImageBuf& albedo,
+                                   int samples, ROI roi = {},
+                                   int nthreads = 0);
+ZDENOISE_API ImageBuf prefilter_albedo(const ImageBuf& albedo, int samples,
+                                       ROI roi = {}, int nthreads = 0);
+
+/// How far a pixel of prefilter_albedo() looks: 5 pixels.
+ZDENOISE_API int albedo_prefilter_halo();
+
 /// One layer of a layered render (docs/FILTER.md section 11): the radiance of
 /// one specular history or BSDF lobe with its own albedo (colour) pass.
 struct Layer {

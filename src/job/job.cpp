@@ -83,6 +83,8 @@ struct Plan {
     /// kept here).
     bool maps = false;
     ErrorPicture picture;
+    /// Samples per pixel of the albedo's prefilter; 0: none.
+    int albedo_samples = 0;
 };
 
 
@@ -210,6 +212,9 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
     for (const OptionalRole* o : p.roles.optional())
         if (o->used)
             show(o->label, o->selection);
+    if (!p.layered)
+        p.albedo_samples = albedo_samples(j, files, p.roles.albedo,
+                                          result.log);
 
     const size_t mode_line = result.log.size();
     if (p.layered) {
@@ -242,7 +247,8 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
     cost.height = p.noisy.height();
     cost.halo   = filter_halo(j.filter);
     // The residual layer's mask looks further than the filter.
-    cost.around = cost.halo + p.layers.reach;
+    cost.around = cost.halo + p.layers.reach
+                  + (p.albedo_samples ? albedo_prefilter_halo() : 0);
     add_file_costs(cost, files);
     // Role images: copies when converted or not lying together in the
     // file, else the file's rows themselves (Strip::image()). The quotient
@@ -263,6 +269,9 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
                            + (p.layers.residual_is_layer ? 8.0 : 0.0);
         cost.core_pixel += 12.0 * double(p.layers.layers.size());
     }
+    // The prefiltered albedo, its variance, its sums (4 doubles).
+    if (p.albedo_samples)
+        cost.held_pixel += 24.0 + 32.0;
     // The maps, and the filter's sums for them (5 doubles a pixel).
     p.maps = j.diagnostics || !j.diagnostics_png.empty();
     if (p.maps)
@@ -340,6 +349,14 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
         convert(img.remodulation, p.spaces.albedo, p.spaces.working, j.aux);
         convert(img.half_a, p.spaces.input, p.spaces.working, j.half_a);
         convert(img.half_b, p.spaces.input, p.spaces.working, j.half_b);
+    }
+    if (p.albedo_samples) {
+        // Over what the filter reads: the strip and its halo.
+        ImageBuf clean;
+        if (!prefilter_albedo(clean, img.albedo, p.albedo_samples,
+                              strip.widened(filter_halo(j.filter)), j.threads))
+            fail(format("'{}': {}", j.albedo.path, one_line(clean.geterror())));
+        img.albedo = std::move(clean);
     }
     auto guide = [](const OptionalRole& o, const ImageBuf& image) {
         return o.used ? &image : nullptr;

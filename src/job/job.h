@@ -72,6 +72,12 @@ struct Job {
     std::string residual;
     /// Also write each denoised layer as NAME.R,G,B (--aovs).
     bool write_layers = false;
+    /// Samples per pixel of the albedo for its prefilter
+    /// (prefilter_albedo(); --albedo-samples); 0: the render's count from
+    /// its metadata when the albedo is the --in file's and no --aux is
+    /// given. --no-albedo-prefilter turns it off.
+    int albedo_samples = 0;
+    bool no_albedo_prefilter = false;
     /// Add the filter's diagnostic maps to the output as the channels
     /// kDiagnosticsLayer.<name> of zdenoise::diagnostic_channels()
     /// (--diagnostics; docs/DIAGNOSTICS.md).

@@ -68,6 +68,8 @@ Inputs (each FILE may take a channel selection, oiiotool style:
 {--id}
 {--variance}
 {--halves}
+{--albedo-samples}
+{--no-albedo-prefilter}
 {--no-normal}
   A Blender Cycles multilayer EXR (channels <layer>.Combined.R ...) needs no
   other input: Combined, Denoising Albedo, Denoising Normal, Denoising Depth
@@ -180,6 +182,13 @@ options()
           "Per-pixel variance of the radiance (1 or 3 channels)." },
         not_in_file_name({ Kind::Halves, "--halves", "halves", {}, "A B",
           "Two independent half renders (radiance = (A+B)/2)." }),
+        { Kind::Whole, "--albedo-samples", "albedo-samples", FIELD(job.albedo_samples), "N",
+          "Samples per pixel of the render's albedo, which is\n"
+          "prefiltered where it is noisy (docs/FILTER.md section\n"
+          "12). Default: a Cycles file's count, for its own\n"
+          "albedo with no --aux." },
+        { Kind::Flag, "--no-albedo-prefilter", "no-albedo-prefilter", FIELD(job.no_albedo_prefilter), "",
+          "Take the albedo as it is (as an --aux image always is)." },
         shown_as("--no-normal, --no-depth, --no-id", { Kind::Flag, "--no-normal", "no-normal", FIELD(job.no_normal), "",
           "Do not use the guide picked by default." }),
         { Kind::Flag, "--no-depth", "no-depth", FIELD(job.no_depth), "", nullptr },

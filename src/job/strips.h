@@ -9,6 +9,8 @@
 
 #pragma once
 
+#include <algorithm>
+
 #include <vector>
 
 #include <OpenImageIO/imagebuf.h>
@@ -38,6 +40,16 @@ struct Strip {
     /// Strip `index` of the frame `noisy` cut in strips of `rows` rows,
     /// holding `around` rows above and below (within the frame).
     void place(const OIIO::ROI& noisy, int index, int rows, int around);
+
+    /// The strip's rows and `rows` more above and below (at most `around`),
+    /// within the frame.
+    OIIO::ROI widened(int rows) const
+    {
+        OIIO::ROI r = core;
+        r.ybegin    = std::max(core.ybegin - rows, held.ybegin);
+        r.yend      = std::min(core.yend + rows, held.yend);
+        return r;
+    }
 
     /// A role's channels over the held rows: a float image of its own, or
     /// for an image only read (`read_only`) and whose channels lie next to

@@ -37,6 +37,11 @@ validate(const Job& job, Spelling spelling)
                    : format("\"tile\" must be 0 (automatic) or a number of "
                             "rows, not {}",
                             job.tile_rows);
+    if (job.albedo_samples < 0)
+        return cli ? format("--albedo-samples needs a number >= 1, got {}",
+                            job.albedo_samples)
+                   : format("\"albedo-samples\" must be 1 or more, not {}",
+                            job.albedo_samples);
     return "";
 }
 
