@@ -281,8 +281,8 @@ run(int argc, char* argv[])
     Timer total;
 
     // Never overwrite an input unless asked.
-    const std::string refused = cli::output_is_input(a.job, a.output,
-                                                     a.force);
+    const std::string refused = job::output_is_input(
+        a.job, a.output, a.force, job::Spelling::CommandLine);
     if (!refused.empty())
         fail(refused);
 

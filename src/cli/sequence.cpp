@@ -20,6 +20,7 @@
 
 #include "../job/atomic_write.h"
 #include "../job/frames.h"
+#include "../job/options.h"
 
 namespace zdenoise {
 namespace cli {
@@ -115,7 +116,8 @@ run_frame(const job::Job& job, FrameRecord& r, const SequenceOptions& o)
         r.error   = why;
         r.seconds = wall();
     };
-    const std::string refused = output_is_input(job, r.output, o.force);
+    const std::string refused = job::output_is_input(
+        job, r.output, o.force, job::Spelling::CommandLine);
     if (!refused.empty())
         return failed(refused);
     job::JobResult result;

@@ -363,6 +363,31 @@ find_flag(const std::string& flag)
 }
 
 
+std::string
+option_name(const Option& option, Spelling spelling)
+{
+    const char* name = spelling == Spelling::CommandLine ? option.flag
+                                                         : option.key;
+    std::string text = name ? name : "";
+    if (spelling == Spelling::Keyword)
+        for (char& c : text)
+            c = c == '-' ? '_' : c;
+    return text;
+}
+
+
+const Option*
+find_option(const std::string& name, Spelling spelling)
+{
+    if (name.empty())
+        return nullptr;
+    for (const Option& o : options())
+        if (option_name(o, spelling) == name)
+            return &o;
+    return nullptr;
+}
+
+
 const Option*
 find_key(const std::string& key)
 {

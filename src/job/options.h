@@ -135,14 +135,38 @@ parse_whole(const std::string& text, int& value);
 bool
 parse_size(const std::string& text, uint64_t& value);
 
-/// How a front end names options in its messages.
-enum class Spelling { CommandLine, Recipe };
+/// How a front end names options, in its messages and (Keyword) when it
+/// looks them up.
+enum class Spelling {
+    CommandLine,  ///< the flag: --value-k
+    Recipe,       ///< the recipe key: "value-k"
+    Keyword       ///< a Python keyword argument (src/python): the recipe
+                  ///< key with '_' for '-', value_k
+};
+
+/// `option`'s name as `spelling` names it; "" when it has none there (-o
+/// has no recipe key, so no keyword either).
+std::string
+option_name(const Option& option, Spelling spelling);
+
+/// The option `spelling` names `name`, or null.
+const Option*
+find_option(const std::string& name, Spelling spelling);
 
 /// Every check of a job that needs no file (validate.cpp): "" when `job`
 /// is valid, else a one-line message naming the option at fault as
 /// `spelling` names it. The command line, recipes and run_job() all use it.
 std::string
 validate(const Job& job, Spelling spelling);
+
+/// Unless `force`: the error for an `output` that is also an input of `job`
+/// (the same existing file, whatever the spelling of its path), which says
+/// how `spelling` allows it (--force, force=True); else "". The command
+/// (a single image and each frame of a batch) and the Python module refuse
+/// such an output the same way.
+std::string
+output_is_input(const Job& job, const std::string& output, bool force,
+                Spelling spelling);
 
 }  // namespace job
 }  // namespace zdenoise

@@ -66,6 +66,18 @@ known_keys(bool in_file_name)
 }
 
 
+/// Where parse_option() takes its values from, and so what it makes of
+/// them: a recipe (`rules` its rules: paths resolved in `folder`, the
+/// recipe's, and confined to it), or a caller's keyword arguments (null
+/// `rules`: paths as given, as on the command line). `spelling`: how the
+/// messages name keys.
+struct Source {
+    std::string folder;
+    const RecipeRules* rules = nullptr;
+    Spelling spelling        = Spelling::Recipe;
+};
+
+
 /// A value as the recipe spells it, cut short for messages.
 std::string
 shown(const json& value)
@@ -86,24 +98,25 @@ is_recipe_path(const std::string& path)
 }
 
 
-/// The file a recipe in `folder` reads for `key`'s path `given`
-/// (confine_path()), or the recipe's error.
+/// The file a recipe in `source.folder` reads for `key`'s path `given`
+/// (confine_path()), or the recipe's error; keyword arguments' `given`.
 std::string
 confined(const std::string& key, const std::string& given,
-         const std::string& folder, const RecipeRules& rules)
+         const Source& source)
 {
+    if (!source.rules)
+        return given;
     std::string path, error;
-    if (!confine_path(key, given, folder, rules, path, error))
+    if (!confine_path(key, given, source.folder, *source.rules, path, error))
         fail(error);
     return path;
 }
 
 
-/// An input: "path" or {"path": "...", "channels": "..."}; relative paths
-/// are relative to the recipe's folder, and confined() to it.
+/// An input: "path" or {"path": "...", "channels": "..."}; a recipe's
+/// relative paths are relative to its folder, and confined() to it.
 InputArg
-parse_input(const std::string& key, const json& value,
-            const std::string& folder, const RecipeRules& rules)
+parse_input(const std::string& key, const json& value, const Source& source)
 {
     InputArg arg;
     arg.given = true;
@@ -131,11 +144,11 @@ parse_input(const std::string& key, const json& value,
     if (arg.path.empty())
         fail(format("\"{}\" names no file (\"path\" is missing or empty)",
                     key));
-    if (is_recipe_path(arg.path))
+    if (source.rules && is_recipe_path(arg.path))
         fail(format("\"{}\" is '{}', itself a recipe: a recipe's inputs must "
                     "be images, not recipes",
                     key, arg.path));
-    arg.path = confined(key, arg.path, folder, rules);
+    arg.path = confined(key, arg.path, source);
     return arg;
 }
 
@@ -245,22 +258,21 @@ parse_string(const std::string& key, const json& value, bool name)
 
 /// Set `option` of `command` from its recipe value.
 void
-parse_option(const Option& option, const json& value,
-             const std::string& folder, const RecipeRules& rules,
+parse_option(const Option& option, const json& value, const Source& source,
              Command& command)
 {
-    const std::string key = option.key;
+    const std::string key = option_name(option, source.spelling);
     switch (option.kind) {
     case Kind::Input:
         std::get<Field<InputArg>>(option.field)(command)
-            = parse_input(key, value, folder, rules);
+            = parse_input(key, value, source);
         break;
     case Kind::Halves:
         if (!value.is_array() || value.size() != 2)
             fail(format("\"halves\" must be a list of two inputs, not {}",
                         shown(value)));
-        command.job.half_a = parse_input(key, value[0], folder, rules);
-        command.job.half_b = parse_input(key, value[1], folder, rules);
+        command.job.half_a = parse_input(key, value[0], source);
+        command.job.half_b = parse_input(key, value[1], source);
         break;
     case Kind::Flag:
         if (!value.is_boolean())
@@ -273,7 +285,7 @@ parse_option(const Option& option, const json& value,
     case Kind::Path: {
         std::string text = parse_string(key, value, option.kind != Kind::Text);
         if (option.kind == Kind::Path)
-            text = confined(key, text, folder, rules);
+            text = confined(key, text, source);
         std::get<Field<std::string>>(option.field)(command) = text;
         break;
     }
@@ -282,10 +294,11 @@ parse_option(const Option& option, const json& value,
             fail(format("\"layers\" must be a list of "
                         "\"NAME=RADIANCE:ALBEDO[:divided][:reflected]\", not {}",
                         shown(value)));
-        if (rules.max_layers && value.size() > size_t(rules.max_layers))
+        if (source.rules && source.rules->max_layers
+            && value.size() > size_t(source.rules->max_layers))
             fail(format("\"layers\" lists {} layers: more than the {} a "
                         "recipe may ({}=layers=N allows more)",
-                        value.size(), rules.max_layers,
+                        value.size(), source.rules->max_layers,
                         kRecipeLimitsVariable));
         std::vector<LayerArg>& layers
             = std::get<Field<std::vector<LayerArg>>>(option.field)(command);
@@ -326,6 +339,20 @@ parse_option(const Option& option, const json& value,
 }
 
 
+/// The "preset" key's `value`, applied to `command` (before the other
+/// filter options, which modify it). `key`: the key as the messages name it.
+void
+parse_preset(const std::string& key, const json& value, Command& command)
+{
+    if (!value.is_string())
+        fail(format("\"{}\" must be a string, not {}", key, shown(value)));
+    if (!apply_preset(value.get<std::string>(), command.job.filter))
+        fail(format("unknown preset '{}' (known: {})",
+                    value.get<std::string>(), preset_names()));
+    command.preset = value.get<std::string>();
+}
+
+
 Job
 parse(const std::string& text, const std::string& folder,
       const std::map<std::string, std::string>& overrides,
@@ -360,14 +387,9 @@ parse(const std::string& text, const std::string& folder,
     Command command;
     // The preset is the base the other filter options modify, as on the
     // command line.
-    if (recipe.contains("preset")) {
-        const json& preset = recipe.at("preset");
-        if (!preset.is_string())
-            fail(format("\"preset\" must be a string, not {}", shown(preset)));
-        if (!apply_preset(preset.get<std::string>(), command.job.filter))
-            fail(format("unknown preset '{}' (known: {})",
-                        preset.get<std::string>(), preset_names()));
-    }
+    if (recipe.contains("preset"))
+        parse_preset("preset", recipe.at("preset"), command);
+    const Source source { folder, &rules, Spelling::Recipe };
     for (const auto& item : recipe.items()) {
         if (item.key() == kVersionKey)
             continue;
@@ -375,7 +397,7 @@ parse(const std::string& text, const std::string& folder,
         if (!option)
             fail(format("unknown key \"{}\" (known: {})", item.key(),
                         known_keys(false)));
-        parse_option(*option, item.value(), folder, rules, command);
+        parse_option(*option, item.value(), source, command);
     }
     const std::string invalid = validate(command.job, Spelling::Recipe);
     if (!invalid.empty())
@@ -505,6 +527,44 @@ read_recipe(const std::string& filename, Job& job, std::string& error)
     }
     return parse_recipe(text, path, Filesystem::parent_path(path), overrides,
                         rules, job, error);
+}
+
+
+bool
+set_keyword_options(const json& keywords,
+                    const std::function<bool(const Option&)>& accepts,
+                    Command& command, std::string& error)
+{
+    try {
+        if (!keywords.is_object())
+            fail("the options must be an object of names and values");
+        auto find = [&](const std::string& name) -> const Option& {
+            const Option* option = find_option(name, Spelling::Keyword);
+            if (!option || !accepts(*option)) {
+                std::string known;
+                for (const Option& o : options())
+                    if (o.key && accepts(o))
+                        known += (known.empty() ? "" : ", ")
+                                 + option_name(o, Spelling::Keyword);
+                fail(format("unknown key \"{}\" (known: {})", name, known));
+            }
+            return *option;
+        };
+        // The preset is the base the other filter options modify, as on
+        // the command line and in recipes.
+        for (const auto& item : keywords.items())
+            if (find(item.key()).kind == Kind::Preset)
+                parse_preset(item.key(), item.value(), command);
+        const Source source { "", nullptr, Spelling::Keyword };
+        for (const auto& item : keywords.items())
+            parse_option(find(item.key()), item.value(), source, command);
+        return true;
+    } catch (const Failure& f) {
+        error = f.message;
+    } catch (const std::exception& e) {
+        error = one_line(e.what());
+    }
+    return false;
 }
 
 

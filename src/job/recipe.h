@@ -8,11 +8,15 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "job.h"
+#include "options.h"
 #include "recipe_rules.h"
 
 namespace zdenoise {
@@ -49,6 +53,24 @@ parse_recipe(const std::string& text, const std::string& name,
              const std::string& folder,
              const std::map<std::string, std::string>& overrides,
              const RecipeRules& rules, Job& job, std::string& error);
+
+/// Set options of `command` from keyword arguments (the Python module's,
+/// src/python): `keywords` is a JSON object of option names as
+/// Spelling::Keyword spells them (value_k) with values as a recipe spells
+/// them (a number, a string, true or false, an input's path or {"path",
+/// "channels"}, lists for "halves" and "layers"). Each is read as a
+/// recipe's key is, with its messages; "preset" first, the base the
+/// others modify. Unlike a recipe's, paths are taken as they are given
+/// (relative to the current folder), the recipe rules do not apply, and an
+/// input may itself be a recipe, as on the command line: the caller runs
+/// with its own rights, it is not a file from anywhere. Only the options
+/// `accepts` are known (another name is an unknown key, and the message
+/// lists the known ones). No validate(): the caller's job is not complete
+/// yet. On failure returns false and a one-line `error`. Never throws.
+bool
+set_keyword_options(const nlohmann::json& keywords,
+                    const std::function<bool(const Option&)>& accepts,
+                    Command& command, std::string& error);
 
 /// The recipe text for `job` whose filter options started from `preset`,
 /// with input paths relative to `folder` (absolute when they are on

@@ -6,7 +6,13 @@
 // opening any file (a job built in code). Each check has the message of
 // both front ends: the command line names --options, recipes "keys".
 // Checks that need the files' headers (channels, layers, memory) are the
-// job's own (job.cpp).
+// job's own (job.cpp). Here too: the refusal of an output that is one of the
+// inputs, which the command and the Python module make before running a
+// job (it asks the file system which paths name one file).
+
+#include <climits>
+#include <cstdlib>
+#include <cstring>
 
 #include <OpenImageIO/strutil.h>
 
@@ -42,6 +48,38 @@ validate(const Job& job, Spelling spelling)
                             job.albedo_samples)
                    : format("\"albedo-samples\" must be 1 or more, not {}",
                             job.albedo_samples);
+    return "";
+}
+
+
+namespace {
+
+/// Whether two paths name the same existing file.
+bool
+same_file(const std::string& a, const std::string& b)
+{
+    char ra[PATH_MAX], rb[PATH_MAX];
+    if (!realpath(a.c_str(), ra) || !realpath(b.c_str(), rb))
+        return false;
+    return std::strcmp(ra, rb) == 0;
+}
+
+}  // namespace
+
+
+std::string
+output_is_input(const Job& job, const std::string& output, bool force,
+                Spelling spelling)
+{
+    if (force)
+        return "";
+    for (const std::string& in : input_paths(job))
+        if (same_file(in, output))
+            return format("the output '{}' is also an input; use {} to "
+                          "replace it",
+                          output,
+                          spelling == Spelling::Keyword ? "force=True"
+                                                        : "--force");
     return "";
 }
 
