@@ -191,15 +191,17 @@ set_options(const json& keywords,
 // zdenoise.denoise(): numpy arrays.
 
 /// The options zdenoise.denoise() takes: the filter's parameters, the
-/// preset they start from, and threads. A later keyword of the filter (the
-/// per-pixel diagnostics maps, say) is a row of the table accepted here,
-/// read from ArrayCall::command by run_array_call().
+/// preset they start from, threads, and albedo-samples (the albedo is a
+/// render's AOV of that many samples a pixel, to prefilter: an array has
+/// no metadata to say so). A later keyword of the filter is a row of the
+/// table accepted here, read from ArrayCall::command by run_array_call().
 bool
 array_option(const job::Option& o)
 {
     return o.key
            && (o.parameter || o.kind == job::Kind::Preset
-               || std::string(o.key) == "threads");
+               || std::string(o.key) == "threads"
+               || std::string(o.key) == "albedo-samples");
 }
 
 
@@ -392,9 +394,17 @@ run_array_call(const ArrayCall& call)
     bool ok = false;
     {
         py::gil_scoped_release unlocked;
-        ok = zdenoise::denoise(dst, radiance, albedo, guides,
-                               call.command.job.filter, nullptr, {},
-                               call.command.job.threads);
+        const job::Job& j = call.command.job;
+        OIIO::ImageBuf clean;
+        ok = j.albedo_samples == 0
+             || zdenoise::prefilter_albedo(clean, albedo, j.albedo_samples,
+                                           {}, j.threads);
+        if (!ok)
+            dst.errorfmt("{}", clean.geterror());
+        ok = ok
+             && zdenoise::denoise(dst, radiance,
+                                  j.albedo_samples ? clean : albedo, guides,
+                                  j.filter, nullptr, {}, j.threads);
     }
     if (!ok)
         throw py::value_error(message(job::one_line(dst.geterror())));

@@ -230,8 +230,9 @@ class Arrays(unittest.TestCase):
         with self.assertRaises(ValueError) as caught:
             zdenoise.denoise(self.noisy, self.albedo, valuek=1)
         message = str(caught.exception)
-        self.assertTrue(message.startswith('unknown key "valuek" (known: preset, rmin, '
-                                           'rmax, eta, edge_k, tau_min, value_k,'), message)
+        self.assertTrue(message.startswith('unknown key "valuek" (known: albedo_samples, '
+                                           'preset, rmin, rmax, eta, edge_k, tau_min, '
+                                           'value_k,'), message)
         known = message[message.index("(known: ") + 8:-1].split(", ")
         self.assertIn("threads", known)
         self.assertNotIn("albedo", known)
@@ -287,7 +288,8 @@ class Arrays(unittest.TestCase):
             pick(*beauty), pick(*("Denoising Albedo." + c for c in "RGB")),
             normal=pick(*("Denoising Normal." + c for c in "XYZ")),
             depth=pick("Denoising Depth.Z"),
-            ids=pick(*("CryptoObject00." + c for c in "rgba")), eta=0.03)
+            ids=pick(*("CryptoObject00." + c for c in "rgba")), eta=0.03,
+            albedo_samples=16)  # the command reads it from the file
         self.assertTrue(np.array_equal(
             out, expected[:, :, [names.index("ViewLayer." + c) for c in beauty]]))
 

@@ -98,6 +98,13 @@ def main(argv):
     ids = (pick(pixels, names, prefix, *crypto, required=False) if crypto
            else pick(pixels, names, prefix, "IndexOB.X", required=False))
 
+    # The render's albedo AOV is noisy where its samples anti-alias texture
+    # and edges: prefiltered given its samples per pixel, which Cycles
+    # records as cycles.<view layer>.samples (as the command reads it).
+    samples = spec.get_string_attribute("cycles." + prefix + "samples")
+    if samples.isdigit() and "albedo_samples" not in options:
+        options["albedo_samples"] = int(samples)
+
     denoised = zdenoise.denoise(radiance, albedo, normal=normal, depth=depth,
                                 ids=ids, **options)
 
