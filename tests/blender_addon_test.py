@@ -229,6 +229,18 @@ check(abs(aux[..., :3].mean() / mean_noisy - 1) < 0.05, "with --aux the mean is 
 s.use_aux = False
 s.mode = "beauty"
 
+# The compositor on (its 'Composite' layer comes first in the EXR) and a second view layer
+# ('Another', which EXR's sorted layers also put first): zdenoise denoises 'Another', the
+# first with a Denoising Albedo, and the status says so.
+scene.use_nodes = True
+extra = scene.view_layers.new("Another")
+render_with_addon(scene)
+check(not s.status_error and "view layer 'Another'" in s.status,
+      f"compositor and two view layers: '{s.status}'")
+check(bpy.data.images["zdenoise"].get("zdenoise_layer") == "Another", "the image says its layer")
+scene.view_layers.remove(extra)
+scene.use_nodes = False
+
 # Errors go to the status line; the render goes on.
 executable = os.environ["ZDENOISE_EXECUTABLE"]
 os.environ["ZDENOISE_EXECUTABLE"] = "/bin/false"

@@ -265,6 +265,9 @@ def _format_snapshot(settings):
     values = {(None, n): v for n, v in _scalars(settings).items()}
     for prop in settings.bl_rna.properties:
         if prop.type == "POINTER" and prop.identifier != "rna_type":
+            if prop.identifier == "linear_colorspace_settings" and not getattr(
+                    settings, "has_linear_colorspace", True):
+                continue  # unset for formats with no linear space (reading it warns)
             sub = getattr(settings, prop.identifier)
             if sub is not None:
                 values.update({(prop.identifier, n): v for n, v in _scalars(sub).items()})
@@ -489,6 +492,7 @@ class Job:
         if self.use_aux and not self.error:
             self.aux_script, self.error = find_aux_script(prefs)
         self.notes = list(_notes.pop(scene.name, []))
+        self.view_layers = sum(1 for vl in scene.view_layers if vl.use)
         self.blender = bpy.app.binary_path
         self.tempdir = None
         self.render = self.aux = self.blend = self.denoised = None
@@ -645,11 +649,11 @@ def store_image(job):
         bpy.data.images.remove(image)
         image = None
     if image is None:
+        # A float buffer: its colour space is the scene linear one, as the EXR's.
         image = bpy.data.images.new(IMAGE_NAME, w, h, alpha=True, float_buffer=True)
         image["zdenoise"] = True
     elif tuple(image.size) != (w, h):
         image.scale(w, h)
-    image.colorspace_settings.name = _scene_linear()
     image.alpha_mode = "STRAIGHT"
     image.pixels.foreach_set(job.pixels)
     image.update()
@@ -659,17 +663,6 @@ def store_image(job):
     image["zdenoise_frame"] = job.frame
     image["zdenoise_layer"] = job.layer[:-1] if job.layer else ""
     return image
-
-
-def _scene_linear():
-    # The colour space of float buffers: the config's scene linear role, which Blender's
-    # own config names 'Linear' (3.x) or 'Linear Rec.709' (4.x).
-    prop = bpy.types.ColorManagedInputColorspaceSettings.bl_rna.properties["name"]
-    names = [item.identifier for item in prop.enum_items]
-    for name in ("Linear", "Linear Rec.709", "scene_linear"):
-        if name in names:
-            return name
-    return names[0] if names else "Linear"
 
 
 def show_image(image):
@@ -708,6 +701,8 @@ def finish(job):
         else:
             where = f", written to {job.output}" if job.output else ""
             aux = " with the auxiliary albedo" if job.use_aux else ""
+            if job.view_layers > 1 and job.layer:
+                aux = f" (view layer '{job.layer[:-1]}')" + aux
             text = (f"Frame {job.frame} denoised{aux} in {job.seconds:.1f} s "
                     f"({job.size[0]}x{job.size[1]}, {job.mode}){where}{notes}")
             log(text)
@@ -763,6 +758,7 @@ def on_render_post(scene, *_args):
         if _in_main_thread():
             process_now(job)
         else:
+            log(f"frame {job.frame} saved in the render thread, queued for the main thread")
             _queue.put(job)
     except Exception as e:  # noqa: BLE001 - never break the render
         log(f"unexpected error: {e}")
@@ -818,7 +814,6 @@ class ZDENOISE_PT_render(bpy.types.Panel):
     bl_space_type = "PROPERTIES"
     bl_region_type = "WINDOW"
     bl_context = "render"
-    bl_options = {"DEFAULT_CLOSED"}
 
     def draw(self, context):
         layout = self.layout
@@ -849,7 +844,8 @@ class ZDENOISE_PT_render(bpy.types.Panel):
             script, why = find_aux_script(preferences())
             if not script:
                 col.label(text=why, icon="ERROR")
-        col.prop(s, "mode", expand=True)
+        row = col.row()
+        row.prop(s, "mode", expand=True)
         col.prop(s, "output_path")
         if not s.output_path:
             col.label(text="No output path: the result is only shown (image 'zdenoise')")
