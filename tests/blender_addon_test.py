@@ -9,7 +9,6 @@ noisy render and a 256-sample one; then the output path, the auxiliary render, t
 Leaves SCRATCH/scene.blend (the add-on on, an output path with '#') for the shell's
 `-f` and `-a` runs.
 """
-import math
 import os
 import sys
 
