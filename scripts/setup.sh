@@ -9,7 +9,7 @@ packages=(g++ cmake make pkg-config libopenimageio-dev libopenexr-dev
           pybind11-dev python3-dev python3-numpy
           # the fuzz targets (scripts/fuzz.sh, CI)
           clang libclang-rt-14-dev
-          # share/blender/zdenoise_aux.py and its BlenderAux test
+          # share/blender/zdenoise_aux.py, zdenoise_addon.py and their BlenderAux, BlenderAddon tests
           blender
           # for the SlurmFarm test only: a one-node Slurm on localhost
           slurmctld slurmd slurm-client munge)

@@ -571,6 +571,54 @@ TEST_F(LayersCli, CryptomatteRanksAreTheObjectIdGuide)
 }
 
 
+// Blender writes the compositor's output as a layer of its own
+// ("Composite.Combined", no other pass) and each view layer as another; the
+// EXR's sorted channel list puts "Back." and "Composite." before
+// "ViewLayer.". The render is the layer with a Denoising Albedo, and its
+// guides are its own (not Back's Cryptomatte); the other layers are kept.
+TEST_F(LayersCli, CyclesCompositeAndOtherViewLayersAreNotTheRender)
+{
+    synth::Scene s     = synth::two_objects_cryptomatte(W, H, { 16, 808 }, 0.2f);
+    synth::Scene other = synth::two_objects_cryptomatte(W, H, { 8, 42 }, 0.2f);
+    ImageBuf alpha = constant(1.0f, 1), grey = constant(0.25f);
+    std::vector<Channel> ch;
+    add_rgb(ch, "Back.Combined", grey);
+    ch.push_back({ "Back.Combined.A", &alpha, 0 });
+    add_rgb(ch, "Back.CryptoObject00", other.object_id, "rgba");
+    add_rgb(ch, "Composite.Combined", grey);
+    ch.push_back({ "Composite.Combined.A", &alpha, 0 });
+    const std::string P = "ViewLayer.";
+    add_rgb(ch, P + "Combined", s.noisy);
+    ch.push_back({ P + "Combined.A", &alpha, 0 });
+    add_rgb(ch, P + "Denoising Albedo", s.albedo);
+    add_rgb(ch, P + "CryptoObject00", s.object_id, "rgba");
+    ImageBuf img = assemble(ch);
+    ASSERT_TRUE(img.write(path("composite.exr")));
+
+    RunResult res = run("--in " + path("composite.exr") + " -o " + path("out.exr") + " -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_NE(res.out.find("Blender Cycles multilayer EXR (layer 'ViewLayer.')"),
+              std::string::npos)
+        << res.out;
+    EXPECT_NE(res.out.find("channels ViewLayer.CryptoObject00.r,ViewLayer.CryptoObject00.g,"
+                           "ViewLayer.CryptoObject00.b,ViewLayer.CryptoObject00.a"),
+              std::string::npos)
+        << "the id guide must be the view layer's own Cryptomatte:\n"
+        << res.out;
+
+    zdenoise::Guides g;
+    g.object_id   = &s.object_id;
+    ImageBuf want = zdenoise::denoise(s.noisy, s.albedo, g);
+    ImageBuf out(path("out.exr"));
+    ASSERT_TRUE(out.read(0, 0, true, TypeFloat));
+    const ImageSpec& os = out.spec();
+    EXPECT_LT(max_rel_diff(out, want, os.channelindex(P + "Combined.R"), 0), 1e-6f);
+    for (const char* layer : { "Back.Combined.R", "Composite.Combined.R" })
+        EXPECT_LT(max_rel_diff(out, grey, os.channelindex(layer), 0), 1e-6f)
+            << layer << " is kept as it is";
+}
+
+
 // Half buffers given as Cycles files of their own take their Combined pass,
 // as --in does, not the file's first three channels (CryptoObject00.r,g,b
 // in a Cycles file): the command gives what the library gives with the

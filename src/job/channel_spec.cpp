@@ -180,17 +180,29 @@ select_channels(const std::vector<std::string>& names, const std::string& select
 bool
 cycles_prefix(const std::vector<std::string>& names, std::string& prefix)
 {
+    // The first layer with a Combined pass and a Denoising Albedo, else the
+    // first with a Combined pass. Blender writes the compositor's output as a
+    // layer of its own ("Composite.Combined", no other pass), which EXR's
+    // sorted channel list puts before "ViewLayer.": it is not the render.
+    bool found = false;
     for (const std::string& n : names) {
-        if (n == "Combined.R") {
-            prefix.clear();
+        std::string p;
+        if (n == "Combined.R")
+            p.clear();
+        else if (OIIO::Strutil::ends_with(n, ".Combined.R"))
+            p = n.substr(0, n.size() - std::string("Combined.R").size());
+        else
+            continue;
+        if (std::find(names.begin(), names.end(), p + "Denoising Albedo.R")
+            != names.end()) {
+            prefix = p;
             return true;
         }
-        if (OIIO::Strutil::ends_with(n, ".Combined.R")) {
-            prefix = n.substr(0, n.size() - std::string("Combined.R").size());
-            return true;
-        }
+        if (!found)
+            prefix = p;
+        found = true;
     }
-    return false;
+    return found;
 }
 
 }  // namespace job

@@ -47,7 +47,9 @@ select_channels(const std::vector<std::string>& names, const std::string& select
 
 /// If the file is a Blender Cycles multilayer EXR (it has a
 /// `<prefix>Combined.R` channel), return true and its layer prefix (e.g.
-/// "ViewLayer."); the first such layer when there are several.
+/// "ViewLayer."). When there are several, the first that also has a
+/// `Denoising Albedo` (Blender's "Composite." layer, the compositor's output,
+/// has none), else the first.
 bool
 cycles_prefix(const std::vector<std::string>& names, std::string& prefix);
 

@@ -89,7 +89,12 @@ cycles_convention(const std::vector<std::string>& names,
     c.albedo = pass("Denoising Albedo", "RGB");
     c.normal = pass("Denoising Normal", "XYZ");
     c.depth  = pass("Denoising Depth", "Z");
-    c.id     = cryptomatte_object_selection(names);
+    // The Cryptomatte ranks of this layer, not another view layer's.
+    std::vector<std::string> own;
+    for (const std::string& n : names)
+        if (OIIO::Strutil::starts_with(n, prefix))
+            own.push_back(n);
+    c.id = cryptomatte_object_selection(own);
     if (c.id.empty())
         c.id = pass("IndexOB", "X");
     // Cycles writes each lobe's lighting divided by its colour:
