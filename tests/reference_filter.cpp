@@ -1006,4 +1006,87 @@ denoise(const RefImage& L, const RefImage& La, const RefGuides& guides,
     return remodulate(zf, La, opt.albedo_eps);
 }
 
+
+RefImage
+prefilter_albedo(const RefImage& A, int samples)
+{
+    // Section 12, in double, one pixel at a time.
+    const int w = A.w, h = A.h;
+    auto finite = [&](int x, int y, int c) { return std::isfinite(A.at(x, y, c)); };
+    // the coverage variance of each value (NaN where not finite)
+    RefImage V(w, h, 3, 0.0f);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c) {
+                if (!finite(x, y, c)) {
+                    V.at(x, y, c) = std::numeric_limits<float>::quiet_NaN();
+                    continue;
+                }
+                double lo = A.at(x, y, c), hi = lo;
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx)
+                        if (A.inside(x + dx, y + dy) && finite(x + dx, y + dy, c)) {
+                            lo = std::min(lo, double(A.at(x + dx, y + dy, c)));
+                            hi = std::max(hi, double(A.at(x + dx, y + dy, c)));
+                        }
+                const double range = hi - lo;
+                const double t     = range > 1e-6 ? (A.at(x, y, c) - lo) / range : 0.0;
+                V.at(x, y, c) = float(range * range * t * (1.0 - t) / std::pow(samples, 1.5));
+            }
+    // d(p, q): mean over channels of ((A_p - A_q)^2 - (V_p + min(V_p, V_q)))
+    // / (1e-10 + V_p + V_q); undefined (NaN) if a value is not finite
+    auto d = [&](int px, int py, int qx, int qy) {
+        double sum = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            const double diff = double(A.at(px, py, c)) - A.at(qx, qy, c);
+            const double vp = V.at(px, py, c), vq = V.at(qx, qy, c);
+            sum += (diff * diff - (vp + std::min(vp, vq))) / (1e-10 + vp + vq);
+        }
+        return sum / 3.0;
+    };
+    RefImage out = A;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            // only where the 3x3 is not flat
+            bool flat = true;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx)
+                    for (int c = 0; c < 3; ++c)
+                        if (A.inside(x + dx, y + dy)
+                            && !(A.at(x + dx, y + dy, c) == A.at(x, y, c)))
+                            flat = false;
+            if (flat)
+                continue;
+            double acc[3] = { 0, 0, 0 }, wsum = 0.0;
+            for (int oy = -3; oy <= 3; ++oy)
+                for (int ox = -3; ox <= 3; ++ox) {
+                    const int qx = x + ox, qy = y + oy;
+                    if (!A.inside(qx, qy) || std::isnan(d(x, y, qx, qy)))
+                        continue;
+                    // the patch: the defined d(p + o, q + o) with p + o in
+                    // the image and q + o too
+                    double sum = 0.0;
+                    int n      = 0;
+                    for (int dy = -1; dy <= 1; ++dy)
+                        for (int dx = -1; dx <= 1; ++dx) {
+                            if (!A.inside(x + dx, y + dy) || !A.inside(qx + dx, qy + dy))
+                                continue;
+                            const double dd = d(x + dx, y + dy, qx + dx, qy + dy);
+                            if (!std::isnan(dd)) {
+                                sum += dd;
+                                ++n;
+                            }
+                        }
+                    const double wq = std::exp(-std::max(sum / n, 0.0));
+                    for (int c = 0; c < 3; ++c)
+                        acc[c] += wq * A.at(qx, qy, c);
+                    wsum += wq;
+                }
+            for (int c = 0; c < 3; ++c)
+                if (finite(x, y, c) && wsum > 0.0)
+                    out.at(x, y, c) = float(acc[c] / wsum);
+        }
+    return out;
+}
+
 }  // namespace zdenoise_ref

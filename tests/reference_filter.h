@@ -82,6 +82,10 @@ RefImage regression_filter(const RefImage& z, const RefImage& La,
                            RefStats* stats = nullptr,
                            RefImage* diagnostics = nullptr);
 
+/// docs/FILTER.md section 12: the albedo prefilter of an albedo of
+/// `samples` samples a pixel (RGB filtered, other channels copied).
+RefImage prefilter_albedo(const RefImage& albedo, int samples);
+
 /// demodulate + regression_filter + remodulate.
 RefImage denoise(const RefImage& L, const RefImage& La, const RefGuides& guides,
                  const zdenoise::FilterOptions& opt, RefStats* stats = nullptr);
