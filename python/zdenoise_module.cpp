@@ -201,7 +201,8 @@ array_option(const job::Option& o)
     return o.key
            && (o.parameter || o.kind == job::Kind::Preset
                || std::string(o.key) == "threads"
-               || std::string(o.key) == "albedo-samples");
+               || std::string(o.key) == "albedo-samples"
+               || std::string(o.key) == "diagnostics");
 }
 
 
@@ -361,8 +362,10 @@ read_array_call(py::handle radiance, py::handle albedo, py::handle normal,
 }
 
 
-/// Run a checked call: the new float32 H x W x C array.
-py::array_t<float>
+/// Run a checked call: the new float32 H x W x C array, and with
+/// diagnostics=True also the H x W x 4 maps of diagnostic_channels(), as a
+/// pair.
+py::object
 run_array_call(const ArrayCall& call)
 {
     const OIIO::ImageBuf radiance = wrapped(call.radiance);
@@ -391,6 +394,12 @@ run_array_call(const ArrayCall& call)
                                            call.radiance.shape(2) };
     py::array_t<float> result(shape);
     OIIO::ImageBuf dst(radiance.spec(), result.mutable_data());
+    // The maps, when asked for: the library's image, copied out below.
+    const bool want_maps = call.command.job.diagnostics;
+    OIIO::ImageBuf maps_image;
+    zdenoise::FilterOptions filter = call.command.job.filter;
+    if (want_maps)
+        filter.diagnostics = &maps_image;
     bool ok = false;
     {
         py::gil_scoped_release unlocked;
@@ -404,15 +413,22 @@ run_array_call(const ArrayCall& call)
         ok = ok
              && zdenoise::denoise(dst, radiance,
                                   j.albedo_samples ? clean : albedo, guides,
-                                  j.filter, nullptr, {}, j.threads);
+                                  filter, nullptr, {}, j.threads);
     }
     if (!ok)
         throw py::value_error(message(job::one_line(dst.geterror())));
-    return result;
+    if (!want_maps)
+        return std::move(result);
+    py::array_t<float> maps(std::vector<py::ssize_t> { shape[0], shape[1], 4 });
+    if (!maps_image.get_pixels(OIIO::ROI(0, int(shape[1]), 0, int(shape[0]),
+                                         0, 1, 0, 4),
+                               OIIO::TypeFloat, maps.mutable_data()))
+        throw py::value_error(message(job::one_line(maps_image.geterror())));
+    return py::make_tuple(result, maps);
 }
 
 
-py::array_t<float>
+py::object
 denoise(py::object radiance, py::object albedo, py::object normal,
         py::object depth, py::object ids, py::object variance,
         py::object halves, py::kwargs options)
@@ -558,7 +574,10 @@ filter_options, keyword arguments:
 These are the command's filter options named as in recipes, with '_' for
 '-' (docs/FILTER.md section 9): the parameters, the preset they start from
 (preset="tuned" or "spec"), and threads (0: all cores; the result does not
-depend on it). None means not given.
+depend on it). None means not given. albedo_samples=N: the albedo is a
+render's AOV of N samples a pixel, prefiltered first (docs/FILTER.md
+section 12). diagnostics=True: return (denoised, maps), maps H x W x 4:
+radius, stop, noise, error (docs/DIAGNOSTICS.md).
 
 A wrong shape, dtype or option raises ValueError naming the argument.
 The filter runs with the GIL released.)";

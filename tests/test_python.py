@@ -93,6 +93,22 @@ class Arrays(unittest.TestCase):
         # Its inputs are left as they were.
         self.assertTrue(np.array_equal(self.noisy, textured_scene()[0]))
 
+    def test_diagnostics_are_the_librarys_maps(self):
+        # diagnostics=True: the same image, and the maps of
+        # docs/DIAGNOSTICS.md beside it.
+        out, maps = zdenoise.denoise(self.noisy, self.albedo, diagnostics=True)
+        self.assertTrue(np.array_equal(out, zdenoise.denoise(self.noisy, self.albedo)))
+        self.assertEqual(maps.shape, self.noisy.shape[:2] + (4,))
+        self.assertEqual(maps.dtype, np.float32)
+        radius, stop, noise, error = (maps[:, :, c] for c in range(4))
+        # (a mean of the windows' radii, to rounding)
+        self.assertTrue(((radius > 2 - 1e-4) & (radius < 16 + 1e-4)).all())
+        self.assertTrue(np.isin(stop, [1, 2, 3]).all())
+        self.assertGreater(float(noise.mean()), 0.0)
+        self.assertTrue(((error > 0) & (error < 1)).all())
+        # The remaining error is far below the input's noise.
+        self.assertLess(float(error.mean()) * 3, float(noise.mean()))
+
     def test_any_dtype_is_the_float32_result(self):
         for dtype in (np.float64, np.float16):
             noisy, albedo = self.noisy.astype(dtype), self.albedo.astype(dtype)
@@ -231,8 +247,8 @@ class Arrays(unittest.TestCase):
             zdenoise.denoise(self.noisy, self.albedo, valuek=1)
         message = str(caught.exception)
         self.assertTrue(message.startswith('unknown key "valuek" (known: albedo_samples, '
-                                           'preset, rmin, rmax, eta, edge_k, tau_min, '
-                                           'value_k,'), message)
+                                           'diagnostics, preset, rmin, rmax, eta, edge_k, '
+                                           'tau_min, value_k,'), message)
         known = message[message.index("(known: ") + 8:-1].split(", ")
         self.assertIn("threads", known)
         self.assertNotIn("albedo", known)
@@ -333,6 +349,14 @@ class Files(unittest.TestCase):
                                 "denoise_file(%r) is not the command's file (%s)"
                                 % (options, " ".join(args)))
             self.assertGreater(stats["windows"], 0)
+        # The maps as the command adds them.
+        r = self.command("--in", SAMPLE, "-o", self.path("cmd_maps.exr"), "--diagnostics")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        zdenoise.denoise_file(SAMPLE, self.path("py_maps.exr"), diagnostics=True)
+        with open(self.path("cmd_maps.exr"), "rb") as a, open(self.path("py_maps.exr"), "rb") as b:
+            self.assertTrue(a.read() == b.read(), "denoise_file(diagnostics=True)")
+        os.remove(self.path("cmd_maps.exr"))
+        os.remove(self.path("py_maps.exr"))
         # Paths as os.PathLike; nothing left behind but the outputs.
         import pathlib
         zdenoise.denoise_file(pathlib.Path(SAMPLE), pathlib.Path(self.path("p.exr")))
