@@ -243,6 +243,13 @@ TEST_F(CliTest, CyclesAlbedoIsPrefilteredWithTheRendersSamples)
                 "with\n",
                 without, with);
     EXPECT_LT(with, without);
+    // The output says how its albedo was taken.
+    EXPECT_NE(pre.spec().get_string_attribute("zdenoise.parameters")
+                  .find("mode=beauty albedo-samples=16"),
+              std::string::npos);
+    EXPECT_EQ(plain.spec().get_string_attribute("zdenoise.parameters")
+                  .find("albedo-samples"),
+              std::string::npos);
     // The noisy albedo AOV itself is carried through unchanged.
     const int alb = pre.spec().channelindex("ViewLayer.Denoising Albedo.G");
     ImageBuf noisy(in);

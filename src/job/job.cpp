@@ -237,9 +237,11 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
     if (p.managed)
         colour::tag_colour_space(spec, p.spaces.output, p.spaces.input);
     spec.attribute("zdenoise.version", ZDENOISE_VERSION_STRING);
-    spec.attribute("zdenoise.parameters",
-                   describe(j.filter)
-                       + (p.layered ? " mode=layers" : " mode=beauty"));
+    std::string parameters = describe(j.filter)
+                             + (p.layered ? " mode=layers" : " mode=beauty");
+    if (p.albedo_samples)
+        parameters += format(" albedo-samples={}", p.albedo_samples);
+    spec.attribute("zdenoise.parameters", parameters);
 
     // Strips: their height from the memory each needs.
     StripCost cost;
