@@ -51,6 +51,23 @@ struct AlbedoPlanes {
         return x >= win.xbegin && x < win.xend && y >= win.ybegin
                && y < win.yend;
     }
+    /// Whether the 3x3 around (x, y) is not flat (some neighbour differs
+    /// in some channel): only such a pixel's footprint can mix albedos. A
+    /// flat one is exact and stays as it is.
+    bool mixes(int x, int y) const
+    {
+        const size_t i = 3 * index(x, y);
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                if (!inside(x + dx, y + dy))
+                    continue;
+                const size_t j = 3 * index(x + dx, y + dy);
+                for (int c = 0; c < 3; ++c)
+                    if (a[j + c] != a[i + c])
+                        return true;
+            }
+        return false;
+    }
 };
 
 /// Section 12: the variance of a pixel mean of N stratified samples of a
@@ -96,15 +113,13 @@ coverage_variance(AlbedoPlanes& p, int samples, int nthreads)
 }
 
 
-
 /// Rows of a band of the output `roi`: the weighted sums of section 12
 /// over the 7x7 offsets, into acc and wsum (indexed as roi), and which
-/// pixels are filtered.
-template<class Noisy>
+/// pixels are filtered (those whose 3x3 mixes albedos).
 void
 filter_rows(const AlbedoPlanes& p, const ROI& rows, const ROI& roi,
-            const Noisy& noisy, std::vector<double>& acc,
-            std::vector<double>& wsum, std::vector<uint8_t>& filtered)
+            std::vector<double>& acc, std::vector<double>& wsum,
+            std::vector<uint8_t>& filtered)
 {
     auto out_index = [&](int x, int y) {
         return size_t(y - roi.ybegin) * size_t(roi.width())
@@ -113,7 +128,7 @@ filter_rows(const AlbedoPlanes& p, const ROI& rows, const ROI& roi,
     bool any = false;
     for (int y = rows.ybegin; y < rows.yend; ++y)
         for (int x = rows.xbegin; x < rows.xend; ++x)
-            if (noisy(x, y)) {
+            if (p.mixes(x, y)) {
                 filtered[out_index(x, y)] = 1;
                 any                       = true;
             }
@@ -146,10 +161,10 @@ filter_rows(const AlbedoPlanes& p, const ROI& rows, const ROI& roi,
                 std::fill(dnr, dnr + nw, 0.0f);
                 if (y + oy < p.win.ybegin || y + oy >= p.win.yend)
                     continue;
-                const float* ap = &p.a[3 * p.index(0 + p.win.xbegin, y)];
-                const float* vp = &p.v[3 * p.index(0 + p.win.xbegin, y)];
-                const float* aq = &p.a[3 * p.index(0 + p.win.xbegin, y + oy)];
-                const float* vq = &p.v[3 * p.index(0 + p.win.xbegin, y + oy)];
+                const float* ap = &p.a[3 * p.index(p.win.xbegin, y)];
+                const float* vp = &p.v[3 * p.index(p.win.xbegin, y)];
+                const float* aq = &p.a[3 * p.index(p.win.xbegin, y + oy)];
+                const float* vq = &p.v[3 * p.index(p.win.xbegin, y + oy)];
                 for (int x = xa; x < xb; ++x) {
                     const int i = 3 * (x - p.win.xbegin);
                     const int j = 3 * (x + ox - p.win.xbegin);
@@ -245,22 +260,6 @@ prefilter_albedo(ImageBuf& dst, const ImageBuf& albedo, int samples, ROI roi,
         if (!std::isfinite(a))
             a = std::numeric_limits<float>::quiet_NaN();
     coverage_variance(p, samples, nthreads);
-    // A pixel whose 3x3 is flat (the same albedo in every channel) is
-    // exact: no footprint there mixes albedos. It stays as it is; only the
-    // others are filtered, and need the patch distances around them.
-    auto noisy = [&](int x, int y) {
-        const size_t i = 3 * p.index(x, y);
-        for (int dy = -1; dy <= 1; ++dy)
-            for (int dx = -1; dx <= 1; ++dx) {
-                if (!p.inside(x + dx, y + dy))
-                    continue;
-                const size_t j = 3 * p.index(x + dx, y + dy);
-                for (int c = 0; c < 3; ++c)
-                    if (p.a[j + c] != p.a[i + c])
-                        return true;
-            }
-        return false;
-    };
     // In bands of rows, each on its own (all its offsets, then the next
     // band), so that a band's planes stay in cache; each pixel adds its
     // offsets in one fixed order, so the result does not depend on the
@@ -273,7 +272,7 @@ prefilter_albedo(ImageBuf& dst, const ImageBuf& albedo, int samples, ROI roi,
         ROI rows   = roi;
         rows.ybegin = roi.ybegin + band * kBandRows;
         rows.yend   = std::min(rows.ybegin + kBandRows, roi.yend);
-        filter_rows(p, rows, roi, noisy, acc, wsum, filtered);
+        filter_rows(p, rows, roi, acc, wsum, filtered);
     }, paropt(nthreads, paropt::SplitDir::Y, 1));  // a task a band
     // RGB from the weighted means (the pixel itself always weighs 1); a
     // value that is not finite, and the other channels, as they were.
