@@ -9,6 +9,8 @@
 #include <random>
 #include <stdexcept>
 
+#include <OpenImageIO/imagebufalgo.h>
+
 namespace synth {
 
 namespace {
@@ -167,6 +169,13 @@ rel_mse(const OIIO::ImageBuf& img, const OIIO::ImageBuf& ref)
 {
     const OIIO::ROI r = ref.roi();
     return rel_mse(img, ref, r.xbegin, r.xend, r.ybegin, r.yend);
+}
+
+bool
+same_pixels(const OIIO::ImageBuf& a, const OIIO::ImageBuf& b)
+{
+    const auto d = OIIO::ImageBufAlgo::compare(a, b, 0.0f, 0.0f);
+    return !d.error && d.nfail == 0 && d.maxerror == 0.0;
 }
 
 double

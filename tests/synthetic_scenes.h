@@ -104,6 +104,9 @@ double rel_mse(const OIIO::ImageBuf& img, const OIIO::ImageBuf& ref);
 double rel_mse(const OIIO::ImageBuf& img, const OIIO::ImageBuf& ref, int x0,
                int x1, int y0, int y1);
 
+/// Whether a and b have the same pixels, exactly (ImageBufAlgo::compare).
+bool same_pixels(const OIIO::ImageBuf& a, const OIIO::ImageBuf& b);
+
 /// Mean luminance over the pixels [x0, x1) x [y0, y1).
 double mean_luminance(const OIIO::ImageBuf& img, int x0, int x1, int y0, int y1);
 

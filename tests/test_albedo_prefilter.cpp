@@ -20,6 +20,7 @@
 
 #include "cli_test.h"
 #include "reference_filter.h"
+#include "synthetic_scenes.h"
 
 using namespace OIIO;
 using namespace cli_test;
@@ -107,30 +108,6 @@ speckle_at(float x, float y, std::mt19937& rng, float* a, bool exact)
         a[c] = v * (1.0f - 0.1f * float(c));
 }
 
-/// Over RGB (channels 0-2 of both) and the pixels of `b`.
-double
-rel_mse(const ImageBuf& a, const ImageBuf& b)
-{
-    double sum = 0.0;
-    int n      = 0;
-    const ROI roi = b.roi();
-    for (int y = roi.ybegin; y < roi.yend; ++y)
-        for (int x = roi.xbegin; x < roi.xend; ++x)
-            for (int c = 0; c < 3; ++c, ++n) {
-                const double p = a.getchannel(x, y, 0, c);
-                const double q = b.getchannel(x, y, 0, c);
-                sum += (p - q) * (p - q) / (q * q + 1e-2);
-            }
-    return sum / n;
-}
-
-bool
-same_pixels(const ImageBuf& a, const ImageBuf& b)
-{
-    auto d = ImageBufAlgo::compare(a, b, 0.0f, 0.0f);
-    return d.nfail == 0 && !d.error;
-}
-
 }  // namespace
 
 
@@ -140,8 +117,8 @@ TEST(AlbedoPrefilter, FineTextAntiAliasedWithFewSamplesComesOutCleaner)
         RenderedAlbedo r = render_albedo(96, 64, samples, 11, text_at);
         ImageBuf clean   = zdenoise::prefilter_albedo(r.noisy, samples);
         ASSERT_FALSE(clean.has_error()) << clean.geterror();
-        const double before = rel_mse(r.noisy, r.exact);
-        const double after  = rel_mse(clean, r.exact);
+        const double before = synth::rel_mse(r.noisy, r.exact);
+        const double after  = synth::rel_mse(clean, r.exact);
         std::printf("  text, %d spp: albedo relMSE %.5f -> %.5f\n", samples,
                     before, after);
         // Measured 0.89x at 4 spp and 0.97x at 16 (the stratified noise
@@ -161,8 +138,8 @@ TEST(AlbedoPrefilter, SpeckledAlbedoOfARoughMetalComesOutCleaner)
 {
     RenderedAlbedo r = render_albedo(96, 64, 4, 12, speckle_at);
     ImageBuf clean   = zdenoise::prefilter_albedo(r.noisy, 4);
-    const double before = rel_mse(r.noisy, r.exact);
-    const double after  = rel_mse(clean, r.exact);
+    const double before = synth::rel_mse(r.noisy, r.exact);
+    const double after  = synth::rel_mse(clean, r.exact);
     std::printf("  speckle, 4 spp: albedo relMSE %.5f -> %.5f\n", before,
                 after);
     // Measured 0.88x: the model takes the samples as stratified, as a
@@ -205,13 +182,13 @@ TEST(AlbedoPrefilter, DoesNotDependOnThreadsOrOnComputingAPart)
     RenderedAlbedo r = render_albedo(96, 64, 4, 14, text_at);
     ImageBuf one = zdenoise::prefilter_albedo(r.noisy, 4, {}, 1);
     ImageBuf two = zdenoise::prefilter_albedo(r.noisy, 4, {}, 2);
-    EXPECT_TRUE(same_pixels(one, two));
+    EXPECT_TRUE(synth::same_pixels(one, two));
     // Rows 20-40 from the rows 20-40 and the halo around them.
     const int halo = zdenoise::albedo_prefilter_halo();
     ImageBuf held  = ImageBufAlgo::crop(r.noisy, ROI(0, 96, 20 - halo, 40 + halo));
     ImageBuf part  = zdenoise::prefilter_albedo(held, 4, ROI(0, 96, 20, 40));
     ASSERT_FALSE(part.has_error()) << part.geterror();
-    EXPECT_TRUE(same_pixels(ImageBufAlgo::crop(part, ROI(0, 96, 20, 40)),
+    EXPECT_TRUE(synth::same_pixels(ImageBufAlgo::crop(part, ROI(0, 96, 20, 40)),
                             ImageBufAlgo::crop(one, ROI(0, 96, 20, 40))));
 }
 
@@ -237,8 +214,8 @@ TEST_F(CliTest, CyclesAlbedoIsPrefilteredWithTheRendersSamples)
     ImageBuf pre(path("pre.exr")), plain(path("plain.exr")), truth(ref);
     ASSERT_TRUE(pre.read(0, 0, true, TypeFloat));
     ASSERT_TRUE(plain.read(0, 0, true, TypeFloat));
-    const double with    = rel_mse(pre, truth);
-    const double without = rel_mse(plain, truth);
+    const double with    = synth::rel_mse(pre, truth);
+    const double without = synth::rel_mse(plain, truth);
     std::printf("  bundled crop: relMSE %.5f without the prefilter, %.5f "
                 "with\n",
                 without, with);

@@ -49,13 +49,6 @@ half_4_half_64(int w, int h)
     return few;
 }
 
-bool
-same_pixels(const ImageBuf& a, const ImageBuf& b)
-{
-    auto d = ImageBufAlgo::compare(a, b, 0.0f, 0.0f);
-    return d.nfail == 0 && !d.error;
-}
-
 }  // namespace
 
 
@@ -113,9 +106,9 @@ TEST(Diagnostics, ChangeNothingAndDoNotDependOnThreadsOrTiles)
     opt.diagnostics = &maps2;
     ImageBuf with2  = zdenoise::denoise(s.noisy, s.albedo, {}, opt, nullptr,
                                         {}, 2);
-    EXPECT_TRUE(same_pixels(plain, with1));
-    EXPECT_TRUE(same_pixels(with1, with2));
-    EXPECT_TRUE(same_pixels(maps1, maps2));
+    EXPECT_TRUE(synth::same_pixels(plain, with1));
+    EXPECT_TRUE(synth::same_pixels(with1, with2));
+    EXPECT_TRUE(synth::same_pixels(maps1, maps2));
     // A strip of rows computed alone has the whole image's maps there.
     ROI strip   = s.noisy.roi();
     strip.ybegin = 30;
@@ -128,7 +121,7 @@ TEST(Diagnostics, ChangeNothingAndDoNotDependOnThreadsOrTiles)
     ROI four     = strip;
     four.chbegin = 0;
     four.chend   = 4;
-    EXPECT_TRUE(same_pixels(ImageBufAlgo::cut(strip_maps, four),
+    EXPECT_TRUE(synth::same_pixels(ImageBufAlgo::cut(strip_maps, four),
                             ImageBufAlgo::cut(maps1, four)));
 }
 
