@@ -884,6 +884,52 @@ TEST_F(AuxCli, WrongAuxIsAOneLineErrorNamingTheFile)
 }
 
 
+// --mode layers with --aux: the auxiliary image's lobe colours remodulate
+// their layers (Cycles' Dir/Ind come divided, so the aux colour only
+// multiplies back), and a lobe it has no colour for keeps its own.
+TEST_F(LayersCli, AuxLobeColoursRemodulateTheirLayers)
+{
+    LobeRender r;
+    const std::string in = write_cycles(r, "cycles.exr");
+    const std::string P  = "ViewLayer.";
+    const ImageBuf brighter = product(r.diff_col, constant(1.25f));
+    ImageBuf black = constant(0.0f), alpha = constant(1.0f, 1);
+    std::vector<Channel> ch;
+    add_rgb(ch, P + "Combined", black);
+    ch.push_back({ P + "Combined.A", &alpha, 0 });
+    add_rgb(ch, P + "Denoising Albedo", r.denoising_albedo);
+    add_rgb(ch, P + "DiffCol", brighter);
+    ImageBuf aux = assemble(ch);
+    ASSERT_TRUE(aux.write(path("aux.exr"))) << aux.geterror();
+
+    RunResult plain = run("--in " + in + " -o " + path("plain.exr") + " --mode layers --aovs");
+    ASSERT_EQ(plain.status, 0) << plain.err;
+    RunResult res = run("--in " + in + " --aux " + path("aux.exr") + " -o " + path("aux_out.exr")
+                        + " --mode layers --aovs -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_NE(res.out.find("layer     ViewLayer.Diff: remodulated by the aux " + P + "DiffCol.R,"),
+              std::string::npos)
+        << res.out;
+    EXPECT_EQ(res.out.find("ViewLayer.Gloss: remodulated"), std::string::npos)
+        << "the aux has no GlossCol:\n" << res.out;
+
+    auto layer = [&](const std::string& file, const char* name) {
+        ImageBuf out(path(file));
+        EXPECT_TRUE(out.read(0, 0, true, TypeFloat)) << out.geterror();
+        const int c = out.spec().channelindex(P + name + ".R");
+        EXPECT_GE(c, 0) << name;
+        ImageBuf rgb;
+        ImageBufAlgo::channels(rgb, out, 3, { c, c + 1, c + 2 });
+        return rgb;
+    };
+    EXPECT_LT(max_rel_diff(layer("aux_out.exr", "Diff"),
+                           product(layer("plain.exr", "Diff"), constant(1.25f))),
+              1e-5f)
+        << "the diffuse layer is its filtered light times the aux DiffCol";
+    EXPECT_EQ(max_rel_diff(layer("aux_out.exr", "Gloss"), layer("plain.exr", "Gloss")), 0.0f);
+}
+
+
 // The library: a remodulation albedo equal to the albedo, or null, is denoise();
 // where the remodulation albedo is unusable the albedo remodulates.
 TEST(AuxLibrary, RemodulationAlbedo)

@@ -6,9 +6,8 @@
 // the layers, the output's layout, the strips), then run_strip() reads,
 // denoises and writes one strip at a time. Each step's work is in a file of
 // its own: role_defaults (what the files' conventions give each role),
-// input_files (headers, channel selection), layers_plan,
-// memory_plan (strips), strips (a strip's images), output (layout, rows,
-// sinks), pixel_moves (the bytes).
+// input_files (headers, channel selection), layers_plan, memory_plan
+// (strips), strips (a strip's images), output (layout, rows, sinks).
 
 #include "job.h"
 
@@ -99,11 +98,9 @@ struct RoleImages {
 bool
 role_as_is(const OptionalRole& o, const Plan& p)
 {
-    if (o.role == Role::Radiance)
-        return p.radiance_as_is;
-    if (o.role == Role::Albedo)
-        return p.albedo_as_is;
-    return true;
+    return o.role == Role::Radiance ? p.radiance_as_is
+           : o.role == Role::Albedo ? p.albedo_as_is
+                                    : true;
 }
 
 
@@ -228,6 +225,9 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
             own ? std::string() : conv.residual_albedo, conv.residual_layer,
             own ? std::string() : conv.residual_unfiltered, p.noisy,
             result.log);
+        if (j.aux.given)
+            use_aux_colours(p.layers, files, j, layer_args, aux, p.noisy,
+                            result.log);
     }
     log_mode(j, conv, p, layer_args, mode_line, result.log);
 

@@ -134,6 +134,32 @@ plan_layers(InputFiles& files, const Job& j,
 }
 
 
+void
+use_aux_colours(LayersPlan& plan, InputFiles& files, const Job& j,
+                const std::vector<LayerArg>& args, const AuxConvention& aux,
+                const ROI& noisy, std::vector<std::string>& log)
+{
+    auto use = [&](LayersPlan::One& one, const std::string& colour) {
+        std::string shown;
+        std::vector<Selection> sel = select_sum(files, j.aux.path, colour,
+                                                noisy, shown);
+        const bool divides = !one.divided
+                             && j.aux_demodulation == AuxDemodulation::Aux;
+        (divides ? one.albedo : one.remodulation) = std::move(sel);
+        log.push_back(format("  layer     {}: {} by the aux {}", one.name,
+                             divides ? "demodulated and remodulated"
+                                     : "remodulated",
+                             shown));
+    };
+    for (size_t i = 0; i < args.size() && i < plan.layers.size(); ++i)
+        for (const auto& lobe : aux.lobe_colours)
+            if (lobe.first == args[i].lobe)
+                use(plan.layers[i], lobe.second);
+    if (plan.residual_is_layer)
+        use(plan.layers.back(), aux.albedo);
+}
+
+
 /// Read the strip's layers and residual as `plan` says.
 std::vector<Layer>
 load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
@@ -142,6 +168,7 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
     const size_t n = plan.layers.size();
     l.radiance.assign(n, ImageBuf());
     l.albedo.assign(n, ImageBuf());
+    l.remodulation.assign(n, ImageBuf());
     l.denoised.assign(n, ImageBuf());
     l.stats.assign(n, FilterStats());
     l.residual.reset();
@@ -156,6 +183,10 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
         layers[i].name      = one.name;
         layers[i].radiance  = &l.radiance[i];
         layers[i].albedo    = &l.albedo[i];
+        if (!one.remodulation.empty()) {
+            l.remodulation[i]              = strip.sum(one.remodulation, true);
+            layers[i].remodulation_albedo = &l.remodulation[i];
+        }
         layers[i].divided   = one.divided;
         layers[i].reflected = one.reflected;
         layers[i].denoised  = &l.denoised[i];
@@ -166,7 +197,10 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
     } else {
         std::vector<Layer> unfiltered(layers.begin(),
                                       layers.begin() + long(given));
+        // The beauty is the layers as the renderer composed them: with
+        // their own colours, not the aux image's.
         for (Layer& layer : unfiltered) {
+            layer.remodulation_albedo = nullptr;
             layer.filter   = false;
             layer.denoised = nullptr;
             layer.stats    = nullptr;

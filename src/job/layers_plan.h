@@ -30,6 +30,8 @@ struct LayersPlan {
     struct One {
         std::string name;
         std::vector<Selection> radiance, albedo;
+        /// A cleaner colour of the layer (the --aux file's), or none.
+        std::vector<Selection> remodulation;
         bool divided = false, reflected = false;
     };
     std::vector<One> layers;  ///< the given ones, then the residual's
@@ -58,9 +60,21 @@ plan_layers(InputFiles& files, const Job& j,
             std::vector<std::string>& log);
 
 
+/// --aux in layers mode (docs/AUX.md): each layer whose lobe the auxiliary
+/// image has a colour for (AuxConvention::lobe_colours; the residual layer:
+/// its albedo) takes that colour as its own where it divides the radiance
+/// (`j.aux_demodulation`, as in beauty mode) and as the remodulation colour
+/// where the radiance came divided (Cycles' Dir/Ind). `args` are the layers
+/// plan_layers() was given, in its order.
+void
+use_aux_colours(LayersPlan& plan, InputFiles& files, const Job& j,
+                const std::vector<LayerArg>& args, const AuxConvention& aux,
+                const OIIO::ROI& noisy, std::vector<std::string>& log);
+
+
 /// The layers of one strip, read.
 struct LoadedLayers {
-    std::vector<OIIO::ImageBuf> radiance, albedo, denoised;
+    std::vector<OIIO::ImageBuf> radiance, albedo, remodulation, denoised;
     std::vector<FilterStats> stats;
     OIIO::ImageBuf residual;
 };
