@@ -6,10 +6,10 @@ HERE=$(cd "$(dirname "$0")" && pwd)
 SHARED=${ZDENOISE_SHARED:-$HERE/../../../shared}
 Z=${ZDENOISE:-$HERE/../../build/bin/zdenoise}
 S=$1; P=$2; T=$3; D=$SHARED/data/$S
-$Z --in $D/${S}_spp${P}_s1.exr --aux $D/${S}_ref.exr -o ${T}_k0.exr > /dev/null
-$Z --in $D/${S}_spp${P}_s1.exr --aux $D/${S}_ref.exr --diagnostics -o ${T}_k0d.exr > /dev/null
+# --diagnostics adds zdenoise.noise (select.py --sigma filter) and moves no pixel.
+$Z --in $D/${S}_spp${P}_s1.exr --aux $D/${S}_ref.exr --diagnostics -o ${T}_k0.exr > /dev/null
 /usr/bin/python3 $HERE/perturb.py $S $P ${T}_pert.exr 0.1 > /dev/null
 $Z --in ${T}_pert.exr --aux $D/${S}_ref.exr -o ${T}_k0p.exr > /dev/null
 /usr/bin/python3 $HERE/feature_regression.py $S $P ${T}.npy
-/usr/bin/python3 $HERE/select_pair_variance.py $S $P $T
-/usr/bin/python3 $HERE/select_filter_noise.py $S $P $T
+/usr/bin/python3 $HERE/select.py $S $P $T --sigma pair
+/usr/bin/python3 $HERE/select.py $S $P $T --sigma filter
