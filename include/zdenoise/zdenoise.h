@@ -105,6 +105,11 @@ struct FilterOptions {
     /// twice as fast and better on the whole public benchmark
     /// (docs/FILTER.md section 9).
     float radius_growth = 2.0f;
+    /// 1 = each pixel takes, by its estimated error, today's filter or the
+    /// feature regression (docs/FILTER.md section 13, include/zdenoise/
+    /// selection.h); 0 = today's filter alone (the default: see
+    /// docs/SELECTION.md for why, measured).
+    int select = 0;
 
     /// Optional progress report with the fraction done in [0,1], called from
     /// one thread at a time (not necessarily the caller's). Not a filter

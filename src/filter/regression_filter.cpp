@@ -25,6 +25,7 @@
 #include "hole_fill.h"
 #include "internal.h"
 #include "outliers.h"
+#include "selected_filter.h"
 #include "window_fitter.h"
 
 namespace zdenoise {
@@ -75,6 +76,8 @@ check_options(ImageBuf& dst, const FilterOptions& o)
         return bad("stride_edges", o.stride_edges, "needs 0 or 1");
     if (o.outlier_spread != 0 && o.outlier_spread != 1)
         return bad("outlier_spread", o.outlier_spread, "needs 0 or 1");
+    if (o.select != 0 && o.select != 1)
+        return bad("select", o.select, "needs 0 or 1");
     if (!finite_nonneg(o.quadrant_power))
         return bad("quadrant_power", o.quadrant_power,
                    "needs a finite number >= 0");
@@ -270,6 +273,11 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
 int
 filter_halo(const FilterOptions& options)
 {
+    if (options.select) {
+        FilterOptions base = options;
+        base.select        = 0;
+        return detail::selected_filter_halo(base);
+    }
     // Everything an output pixel depends on lies within 2*r_max (centres up
     // to r_max away, their windows r_max further) plus the footprint of the
     // noise estimate and the outlier test: the smoothing's 3x3 (1) of the
@@ -328,6 +336,9 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         && !detail::prepare_diagnostics(dst, *options.diagnostics, roi,
                                         tile_opt.frame, opname))
         return false;
+    if (options.select)
+        return detail::selected_regression_filter(dst, quotient, albedo, guides,
+                                                  tile_opt, stats, roi, nthreads);
 
     // Tiles bound the working memory (about 100 bytes per pixel of a tile
     // and its halo) whatever the frame size; the result is exactly the

@@ -116,6 +116,7 @@ Filter parameters (docs/FILTER.md):
 {--stride}
 {--stride-edges}
 {--outlier-spread}
+{--select}
 
 Frame sequences (oiiotool's conventions) and batches:
 {--frames}
@@ -286,6 +287,10 @@ options()
         parameter({ Kind::Real, "--radius-growth", "radius-growth", FIELD(job.filter.radius_growth), "X",
           "Radius tried after R: max(R+1, R*X) (2: radii 2, 4, 8,\n"
           "16; 1 = the method's R+1, as --preset spec)" }),
+        parameter({ Kind::Whole, "--select", "select", FIELD(job.filter.select), "0|1",
+          "1: each pixel takes today's filter or a feature\n"
+          "regression, by its estimated error (SURE; about 2.5x\n"
+          "the time; docs/FILTER.md section 13) (0)" }),
         always_written({ Kind::Whole, "--threads", "threads", FIELD(job.threads), "N",
           "Threads (default: all cores); results do not depend\n"
           "on it." }),

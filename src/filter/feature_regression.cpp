@@ -1,0 +1,445 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// feature_regression(): the second candidate filter of the selection
+// (docs/FILTER.md section 13.2), after Bitterli et al. 2016 (NFOR): in each
+// window a first-order weighted least-squares fit of the quotient on the
+// features, with patch weights on a pilot estimate, splatted with the same
+// weights. Stages, in order:
+//   decode_points()   z, pilot, features and validity over the region
+//   fit_window()      one centre's weights, normal equations, Cholesky
+//   splat_window()    its predictions, clamped, and its hat diagonal
+//   normalise()       acc / wsum and hsum / wsum per output pixel
+
+#include <zdenoise/selection.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include <OpenImageIO/imagebufalgo_util.h>
+
+#include "internal.h"
+
+namespace zdenoise {
+
+using namespace OIIO;
+
+namespace {
+
+constexpr int kMaxFeatures = 7;  ///< 1, dx, dy, normal (3), inverse depth
+
+/// The inputs over the region, row-major.
+struct Points {
+    ROI region;
+    int width = 0;
+    int nfeatures = 3;
+    std::vector<float> z;        ///< 3 a pixel
+    std::vector<uint8_t> valid;  ///< takes part in fits
+    std::vector<float> pilot_l;  ///< pilot luminance
+    std::vector<float> pilot_v;  ///< variance of pilot_l
+    std::vector<float> normal;   ///< unit, 3 a pixel (empty: none)
+    std::vector<float> invdepth; ///< 1/depth (empty: none)
+    std::vector<uint32_t> id;    ///< bits of channel 0 (empty: none)
+    size_t index(int x, int y) const
+    {
+        return size_t(y - region.ybegin) * size_t(width)
+               + size_t(x - region.xbegin);
+    }
+};
+
+std::vector<float>
+read(const ImageBuf& img, const ROI& region, int chbegin, int chend)
+{
+    ROI r    = region;
+    r.chbegin = chbegin;
+    r.chend   = chend;
+    std::vector<float> v(region.npixels() * size_t(chend - chbegin));
+    img.get_pixels(r, TypeFloat, v.data());
+    return v;
+}
+
+Points
+decode_points(const ImageBuf& quotient, const ImageBuf& pilot,
+              const Guides& guides, const ROI& region)
+{
+    Points p;
+    p.region = region;
+    p.width  = region.width();
+    const size_t npix = region.npixels();
+    p.z = read(quotient, region, 0, 3);
+    const std::vector<float> pl = read(pilot, region, 0, 4);
+    p.pilot_l.resize(npix);
+    p.pilot_v.resize(npix);
+    p.valid.assign(npix, 0);
+    std::vector<float> depth;
+    if (guides.depth)
+        depth = read(*guides.depth, region, 0, 1);
+    if (guides.normal) {
+        p.normal = read(*guides.normal, region, 0, 3);
+        p.nfeatures += 3;
+    }
+    if (guides.depth) {
+        p.invdepth.assign(npix, 0.0f);
+        p.nfeatures += 1;
+    }
+    if (guides.object_id) {
+        const std::vector<float> ids = read(*guides.object_id, region, 0, 1);
+        p.id.resize(npix);
+        std::memcpy(p.id.data(), ids.data(), npix * 4);
+    }
+    for (size_t i = 0; i < npix; ++i) {
+        const float* pi = &pl[4 * i];
+        p.pilot_l[i] = detail::kLumaWeights[0] * pi[0]
+                       + detail::kLumaWeights[1] * pi[1]
+                       + detail::kLumaWeights[2] * pi[2];
+        p.pilot_v[i] = std::isfinite(pi[3]) && pi[3] > 0.0f ? pi[3] : 0.0f;
+        bool ok = std::isfinite(p.pilot_l[i]);
+        for (int c = 0; c < 3; ++c)
+            ok = ok && std::isfinite(p.z[3 * i + c])
+                 && std::fabs(p.z[3 * i + c]) < detail::kLargestFitQuotient;
+        if (!p.normal.empty()) {
+            float* n = &p.normal[3 * i];
+            const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            if (len >= 1e-6f && std::isfinite(len))
+                n[0] /= len, n[1] /= len, n[2] /= len;
+            else
+                n[0] = n[1] = n[2] = 0.0f;
+        }
+        if (!depth.empty()) {
+            const float d = depth[i];
+            if (d > 0.0f && d < 1e9f && std::isfinite(d))
+                p.invdepth[i] = 1.0f / d;
+            else
+                ok = false;
+        }
+        p.valid[i] = ok;
+    }
+    return p;
+}
+
+/// One window's fit: its centre, the solved coefficients and the Cholesky
+/// factor of its normal matrix (for the hat diagonal).
+struct WindowFit {
+    int x0 = 0, y0 = 0;
+    int nf = 0;
+    double beta[kMaxFeatures][3] = {};
+    double chol[kMaxFeatures][kMaxFeatures] = {};
+    float lo[3] = {}, hi[3] = {};  ///< range of z over the weighted points
+};
+
+/// The features of point j for the window centred on i0, relative to the
+/// centre (so that the constant term is the fit's value at the centre).
+int
+features(const Points& p, size_t i0, size_t j, int dx, int dy, float inv_r,
+         double* x)
+{
+    int n = 0;
+    x[n++] = 1.0;
+    x[n++] = dx * inv_r;
+    x[n++] = dy * inv_r;
+    if (!p.normal.empty())
+        for (int c = 0; c < 3; ++c)
+            x[n++] = double(p.normal[3 * j + c]) - p.normal[3 * i0 + c];
+    if (!p.invdepth.empty())
+        x[n++] = (double(p.invdepth[j]) - p.invdepth[i0]) / p.invdepth[i0];
+    return n;
+}
+
+/// The weight of point (x, y) in the window centred on (x0, y0): spatial
+/// Gaussian x same id x the patch weight exp(-max(0, d2)), d2 the
+/// variance-cancelled distance of the pilot's patches (FILTER.md 13.2).
+float
+point_weight(const Points& p, const FeatureRegressionOptions& o, int x0,
+             int y0, int x, int y)
+{
+    const size_t i0 = p.index(x0, y0), j = p.index(x, y);
+    if (!p.valid[j])
+        return 0.0f;
+    if (!p.id.empty() && p.id[j] != p.id[i0])
+        return 0.0f;
+    const float k2 = o.patch_k * o.patch_k;
+    double d2 = 0.0;
+    int n     = 0;
+    const int pr = o.patch_radius;
+    for (int ty = -pr; ty <= pr; ++ty)
+        for (int tx = -pr; tx <= pr; ++tx) {
+            const int ax = x0 + tx, ay = y0 + ty, bx = x + tx, by = y + ty;
+            if (!p.region.contains(ax, ay) || !p.region.contains(bx, by))
+                continue;
+            const size_t a = p.index(ax, ay), b = p.index(bx, by);
+            const double va = p.pilot_v[a], vb = p.pilot_v[b];
+            const double la = p.pilot_l[a], lb = p.pilot_l[b];
+            const double diff = la - lb;
+            // A 1 % difference is always tolerated: the pilot's own bias.
+            const double floor = 1e-4 * (la * la + lb * lb) + 1e-30;
+            d2 += (diff * diff - (va + std::min(va, vb)))
+                  / (floor + k2 * (va + vb));
+            ++n;
+        }
+    if (n)
+        d2 /= n;
+    const double r2  = double(o.radius) * o.radius;
+    const double sp  = double(x - x0) * (x - x0) + double(y - y0) * (y - y0);
+    return float(std::exp(-sp / r2 - std::max(0.0, d2)));
+}
+
+/// Fit the window centred on (x0, y0); false when it has no usable centre.
+bool
+fit_window(const Points& p, const FeatureRegressionOptions& o,
+           const ROI& clip, int x0, int y0, WindowFit& fit)
+{
+    const size_t i0 = p.index(x0, y0);
+    if (!p.valid[i0])
+        return false;
+    const int r = o.radius, nf = p.nfeatures;
+    const float inv_r = 1.0f / float(r);
+    double M[kMaxFeatures][kMaxFeatures] = {}, B[kMaxFeatures][3] = {};
+    fit.x0 = x0, fit.y0 = y0, fit.nf = nf;
+    for (int c = 0; c < 3; ++c)
+        fit.lo[c] = fit.hi[c] = p.z[3 * i0 + c];
+    for (int y = std::max(y0 - r, clip.ybegin); y <= std::min(y0 + r, clip.yend - 1); ++y)
+        for (int x = std::max(x0 - r, clip.xbegin); x <= std::min(x0 + r, clip.xend - 1); ++x) {
+            const float w = point_weight(p, o, x0, y0, x, y);
+            if (!(w > 0.0f))
+                continue;
+            const size_t j = p.index(x, y);
+            double f[kMaxFeatures];
+            features(p, i0, j, x - x0, y - y0, inv_r, f);
+            for (int a = 0; a < nf; ++a) {
+                for (int b = 0; b <= a; ++b)
+                    M[a][b] += w * f[a] * f[b];
+                for (int c = 0; c < 3; ++c)
+                    B[a][c] += w * f[a] * p.z[3 * j + c];
+            }
+            for (int c = 0; c < 3; ++c) {
+                fit.lo[c] = std::min(fit.lo[c], p.z[3 * j + c]);
+                fit.hi[c] = std::max(fit.hi[c], p.z[3 * j + c]);
+            }
+        }
+    // Ridge on the non-constant features relative to the window's weight:
+    // the features are O(1) where they vary (dx/r, normal differences,
+    // relative inverse depth), so a feature that varies by less than
+    // sqrt(ridge) over the window (a flat depth, a constant normal) is
+    // not fitted to the noise, and a constant one (zero column) stays
+    // solvable.
+    for (int a = 1; a < nf; ++a)
+        M[a][a] += o.ridge * M[0][0];
+    // Cholesky M = L L^T, in place in fit.chol (lower triangle).
+    auto& L = fit.chol;
+    for (int a = 0; a < nf; ++a) {
+        for (int b = 0; b <= a; ++b) {
+            double s = M[a][b];
+            for (int k = 0; k < b; ++k)
+                s -= L[a][k] * L[b][k];
+            if (a == b) {
+                if (!(s > 0.0))
+                    return false;
+                L[a][a] = std::sqrt(s);
+            } else {
+                L[a][b] = s / L[b][b];
+            }
+        }
+    }
+    // beta = M^-1 B: forward then backward substitution.
+    for (int c = 0; c < 3; ++c) {
+        double t[kMaxFeatures];
+        for (int a = 0; a < nf; ++a) {
+            double s = B[a][c];
+            for (int k = 0; k < a; ++k)
+                s -= L[a][k] * t[k];
+            t[a] = s / L[a][a];
+        }
+        for (int a = nf - 1; a >= 0; --a) {
+            double s = t[a];
+            for (int k = a + 1; k < nf; ++k)
+                s -= L[k][a] * fit.beta[k][c];
+            fit.beta[a][c] = s / L[a][a];
+        }
+    }
+    return true;
+}
+
+/// The output pixels' sums: s P per channel, s, s h.
+struct Sums {
+    std::vector<double> acc, wsum, hsum;
+    explicit Sums(size_t n) : acc(3 * n, 0.0), wsum(n, 0.0), hsum(n, 0.0) {}
+};
+
+/// Splat one fitted window onto the output pixels of roi it covers: the
+/// prediction at each point, clamped to the range of z the window saw
+/// (no light beyond what the render has), with the fit's weight; and the
+/// hat diagonal h = w x^T M^-1 x (0 where clamped: the value no longer
+/// moves with z there, up to the point attaining the bound).
+void
+splat_window(const Points& p, const FeatureRegressionOptions& o,
+             const ROI& clip, const ROI& roi, const WindowFit& fit, Sums& s)
+{
+    const int r = o.radius, nf = fit.nf;
+    const float inv_r = 1.0f / float(r);
+    const size_t i0 = p.index(fit.x0, fit.y0);
+    const int ylo = std::max({ fit.y0 - r, clip.ybegin, roi.ybegin });
+    const int yhi = std::min({ fit.y0 + r, clip.yend - 1, roi.yend - 1 });
+    const int xlo = std::max({ fit.x0 - r, clip.xbegin, roi.xbegin });
+    const int xhi = std::min({ fit.x0 + r, clip.xend - 1, roi.xend - 1 });
+    for (int y = ylo; y <= yhi; ++y)
+        for (int x = xlo; x <= xhi; ++x) {
+            const float w = point_weight(p, o, fit.x0, fit.y0, x, y);
+            if (!(w > 0.0f))
+                continue;
+            const size_t j = p.index(x, y);
+            double f[kMaxFeatures];
+            features(p, i0, j, x - fit.x0, y - fit.y0, inv_r, f);
+            // ||L^-1 x||^2 = x^T M^-1 x.
+            double t[kMaxFeatures], q = 0.0;
+            for (int a = 0; a < nf; ++a) {
+                double v = f[a];
+                for (int k = 0; k < a; ++k)
+                    v -= fit.chol[a][k] * t[k];
+                t[a] = v / fit.chol[a][a];
+                q += t[a] * t[a];
+            }
+            const size_t o_ = size_t(y - roi.ybegin) * size_t(roi.width())
+                              + size_t(x - roi.xbegin);
+            double hl = 0.0;
+            for (int c = 0; c < 3; ++c) {
+                double v = 0.0;
+                for (int a = 0; a < nf; ++a)
+                    v += f[a] * fit.beta[a][c];
+                const double clamped = std::min(std::max(v, double(fit.lo[c])),
+                                                double(fit.hi[c]));
+                if (clamped == v)
+                    hl += detail::kLumaWeights[c] * w * q;
+                s.acc[3 * o_ + c] += w * clamped;
+            }
+            s.wsum[o_] += w;
+            s.hsum[o_] += w * hl;
+        }
+}
+
+}  // namespace
+
+
+int
+feature_regression_halo(const FeatureRegressionOptions& o)
+{
+    // A pixel is splatted by centres up to radius away, whose windows and
+    // patch weights reach radius + patch_radius further.
+    return 2 * std::max(o.radius, 0) + std::max(o.patch_radius, 0);
+}
+
+
+bool
+feature_regression(ImageBuf& dst, const ImageBuf& quotient,
+                   const ImageBuf& pilot, const Guides& guides,
+                   const FeatureRegressionOptions& options, ROI roi,
+                   int nthreads)
+{
+    const char* opname = "feature_regression";
+    FeatureRegressionOptions o = options;
+    if (!o.frame.defined())
+        o.frame = quotient.roi();
+    if (!roi.defined())
+        roi = o.frame;
+    roi.chbegin = 0;
+    roi.chend   = 4;
+    if (o.radius < 1 || o.radius > 64)
+        return dst.errorfmt("{}: option radius = {} is invalid: needs 1..64",
+                            opname, o.radius), false;
+    if (o.centre_stride < 1 || o.centre_stride > o.radius)
+        return dst.errorfmt("{}: option centre_stride = {} is invalid: needs "
+                            "1..radius", opname, o.centre_stride), false;
+    if (o.patch_radius < 0 || o.patch_radius > 8)
+        return dst.errorfmt("{}: option patch_radius = {} is invalid: needs "
+                            "0..8", opname, o.patch_radius), false;
+    if (!(o.patch_k > 0.0f) || !std::isfinite(o.patch_k))
+        return dst.errorfmt("{}: option patch_k = {} is invalid: needs a "
+                            "finite number > 0", opname, o.patch_k), false;
+    if (!(o.ridge >= 0.0f) || !std::isfinite(o.ridge))
+        return dst.errorfmt("{}: option ridge = {} is invalid: needs a finite "
+                            "number >= 0", opname, o.ridge), false;
+    if (!detail::check_frame(dst, opname, roi, o.frame))
+        return false;
+    const ROI region = detail::halo_region(roi, o.frame, feature_regression_halo(o));
+    if (!detail::check_input(dst, quotient, opname, "quotient", region, 3)
+        || !detail::check_input(dst, pilot, opname, "pilot", region, 4))
+        return false;
+    struct NamedGuide {
+        const ImageBuf* buf;
+        const char* name;
+        int minchannels;
+    } named[] = { { guides.normal, "normal guide", 3 },
+                  { guides.depth, "depth guide", 1 },
+                  { guides.object_id, "object id guide", 1 } };
+    for (const NamedGuide& g : named)
+        if (g.buf && !detail::check_input(dst, *g.buf, opname, g.name, region, g.minchannels))
+            return false;
+    if (!dst.initialized()) {
+        ImageSpec spec(roi, TypeFloat);
+        spec.full_x = o.frame.xbegin, spec.full_y = o.frame.ybegin;
+        spec.full_width = o.frame.width(), spec.full_height = o.frame.height();
+        spec.channelnames = { "R", "G", "B", "D" };
+        dst.reset(spec);
+    } else if (dst.nchannels() < 4 || !dst.roi().contains(roi.xbegin, roi.ybegin)
+               || !dst.roi().contains(roi.xend - 1, roi.yend - 1)) {
+        return dst.errorfmt("{}: the destination needs 4 channels over the "
+                            "output pixels", opname), false;
+    }
+
+    const Points p = decode_points(quotient, pilot, guides, region);
+    // Windows clip at the frame, whose part held here is the region.
+    const ROI clip = region;
+    // Centres: lattice points (anchored at the frame's origin) whose window
+    // reaches roi. Lattice rows a multiple of `phases` apart have disjoint
+    // windows, so the rows of one phase run in parallel and every pixel
+    // receives its windows in phase order, then left to right: a fixed
+    // order for any thread count or part of the frame (section 8).
+    const int s = o.centre_stride, r = o.radius;
+    auto first_at_or_after = [s](int v, int origin) {
+        const int d = v - origin;
+        return origin + (d >= 0 ? (d + s - 1) / s : -((-d) / s)) * s;
+    };
+    const int cy0 = first_at_or_after(std::max(roi.ybegin - r, region.ybegin), o.frame.ybegin);
+    const int cx0 = first_at_or_after(std::max(roi.xbegin - r, region.xbegin), o.frame.xbegin);
+    const int cy1 = std::min(roi.yend - 1 + r, region.yend - 1);
+    const int cx1 = std::min(roi.xend - 1 + r, region.xend - 1);
+    const int phases = 2 * r / s + 1;
+    Sums sums(roi.npixels());
+    std::vector<int> rows;
+    for (int phase = 0; phase < phases; ++phase) {
+        rows.clear();
+        for (int y = cy0; y <= cy1; y += s)
+            if (((y - o.frame.ybegin) / s) % phases == phase)
+                rows.push_back(y);
+        parallel_for(int64_t(0), int64_t(rows.size()), [&](int64_t k) {
+            const int y0 = rows[size_t(k)];
+            WindowFit fit;
+            for (int x0 = cx0; x0 <= cx1; x0 += s)
+                if (fit_window(p, o, clip, x0, y0, fit))
+                    splat_window(p, o, clip, roi, fit, sums);
+        }, paropt(nthreads, paropt::SplitDir::Y, 1));
+    }
+    const size_t nout = roi.npixels();
+    std::vector<float> out(4 * nout);
+    for (int y = roi.ybegin; y < roi.yend; ++y)
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const size_t o_ = size_t(y - roi.ybegin) * size_t(roi.width())
+                              + size_t(x - roi.xbegin);
+            const size_t i = p.index(x, y);
+            float* d       = &out[4 * o_];
+            if (p.valid[i] && sums.wsum[o_] > 0.0) {
+                for (int c = 0; c < 3; ++c)
+                    d[c] = float(sums.acc[3 * o_ + c] / sums.wsum[o_]);
+                d[3] = float(sums.hsum[o_] / sums.wsum[o_]);
+            } else {
+                for (int c = 0; c < 3; ++c)
+                    d[c] = std::isfinite(p.z[3 * i + c]) ? p.z[3 * i + c] : 0.0f;
+                d[3] = 1.0f;
+            }
+        }
+    if (!dst.set_pixels(roi, TypeFloat, out.data()))
+        return dst.errorfmt("{}: could not store the result", opname), false;
+    return true;
+}
+
+}  // namespace zdenoise

@@ -1,0 +1,314 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// regression_filter() with FilterOptions::select = 1 (docs/FILTER.md
+// section 13): two candidates and the per-pixel choice between them by
+// Stein's unbiased risk estimate. Stages, in order:
+//   regression_filter()   candidate 0, today's filter, and its noise map
+//   hat_diagonal()        its D by Monte-Carlo SURE: one more run on the
+//                         quotient nudged by +-0.1 sigma per pixel
+//   feature_regression()  candidate 1, with candidate 0 as its pilot
+//   sure_risk()           each candidate's risk, relative-MSE weighted
+//   select_by_risk()      the choice map and the blend
+
+#include "selected_filter.h"
+
+#include <zdenoise/selection.h>
+
+#include <cmath>
+#include <cstdint>
+
+#include <OpenImageIO/imagebufalgo.h>
+
+#include "filter_inputs.h"
+#include "internal.h"
+
+namespace zdenoise {
+namespace detail {
+
+using namespace OIIO;
+
+namespace {
+
+/// Size of the nudge of Monte-Carlo SURE, relative to the local light
+/// level: smooth from pixel to pixel (a nudge scaled by the noisy per-pixel
+/// sigma makes the neighbours' cross terms explode where sigma dips), small
+/// enough that the filter's stops rarely move, large enough for floats.
+constexpr float kNudge = 0.02f;
+
+/// Half-size of the box whose mean |z_l| is the local light level.
+constexpr int kScaleRadius = 3;
+
+/// How far the noise estimate of a pixel looks (filter_halo()'s 6).
+constexpr int kNoiseFootprint = 6;
+
+/// Outliers are left out of the risk averages (of every candidate alike):
+/// a firefly's own squared error would decide its whole neighbourhood.
+constexpr float kOutlierSigmas = 4.0f;
+
+/// +1 or -1, a hash of the pixel's position in the frame (relative to its
+/// origin): the same for any strip and any data window origin.
+float
+nudge_sign(int x, int y)
+{
+    uint32_t h = uint32_t(x) * 0x9E3779B1u ^ (uint32_t(y) * 0x85EBCA77u);
+    h ^= h >> 15;
+    h *= 0x2C1B3C6Du;
+    h ^= h >> 12;
+    return (h & 1u) ? 1.0f : -1.0f;
+}
+
+float
+luminance(const float* c)
+{
+    return kLumaWeights[0] * c[0] + kLumaWeights[1] * c[1]
+           + kLumaWeights[2] * c[2];
+}
+
+std::vector<float>
+read(const ImageBuf& img, ROI r, int chbegin, int chend)
+{
+    r.chbegin = chbegin;
+    r.chend   = chend;
+    std::vector<float> v(r.npixels() * size_t(chend - chbegin));
+    img.get_pixels(r, TypeFloat, v.data());
+    return v;
+}
+
+/// Store `v` (all of img's channels a pixel) over the pixels of r.
+void
+store(ImageBuf& img, ROI r, const std::vector<float>& v)
+{
+    r.chbegin = 0;
+    r.chend   = img.nchannels();
+    img.set_pixels(r, TypeFloat, v.data());
+}
+
+ImageBuf
+float_image(const ROI& r, const ROI& frame, int nch)
+{
+    ImageSpec spec(r.width(), r.height(), nch, TypeFloat);
+    spec.x = r.xbegin, spec.y = r.ybegin;
+    spec.full_x = frame.xbegin, spec.full_y = frame.ybegin;
+    spec.full_width = frame.width(), spec.full_height = frame.height();
+    return ImageBuf(spec);
+}
+
+}  // namespace
+
+
+int
+selected_filter_halo(const FilterOptions& base)
+{
+    // The choice reads the candidates over its halo, the feature regression
+    // the pilot (candidate 0) over its own, candidate 0 and its nudged run
+    // the quotient over the filter's, and the nudge its 7x7.
+    return selection_halo(SelectionOptions {})
+           + feature_regression_halo(FeatureRegressionOptions {})
+           + filter_halo(base) + kScaleRadius;
+}
+
+
+bool
+selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
+                           const ImageBuf& albedo, const Guides& guides,
+                           const FilterOptions& options, FilterStats* stats,
+                           ROI roi, int nthreads)
+{
+    const ROI& frame = options.frame;
+    FilterOptions base = options;
+    base.select      = 0;
+    FeatureRegressionOptions fo;
+    fo.frame = frame;
+    SelectionOptions so;
+    so.frame = frame;
+    const int nch = quotient.nchannels();
+    ROI sel = halo_region(roi, frame, selection_halo(so));
+    ROI pil = halo_region(sel, frame, feature_regression_halo(fo));
+    sel.chbegin = pil.chbegin = roi.chbegin = 0;
+    sel.chend = pil.chend = roi.chend = nch;
+    auto fail = [&](const ImageBuf& from) {
+        dst.errorfmt("{}", from.geterror());
+        return false;
+    };
+    auto progress = [&](float lo, float hi) -> std::function<void(float)> {
+        if (!options.progress)
+            return nullptr;
+        return [&, lo, hi](float f) { options.progress(lo + (hi - lo) * f); };
+    };
+
+    // Candidate 0 over the pilot's support (with its maps if asked for).
+    ImageBuf out0, maps, nudged_out0;
+    base.diagnostics = options.diagnostics ? &maps : nullptr;
+    base.progress    = progress(0.0f, 0.4f);
+    if (!regression_filter(out0, quotient, albedo, guides, base, stats, pil,
+                           nthreads))
+        return fail(out0);
+    const size_t np = pil.npixels();
+    const std::vector<float> o0 = read(out0, pil, 0, 3);
+    // Its noise estimate (section 3), decoded with the footprint it has in
+    // the filter, so that it is the same in any strip: the standard
+    // deviation of z_l at fit points, else 0 (no observation).
+    std::vector<float> s(np, 0.0f);
+    {
+        FilterInputs in;
+        if (!decode_filter_inputs(in, dst, quotient, albedo, guides, base,
+                                  halo_region(pil, frame, kNoiseFootprint),
+                                  nthreads))
+            return false;
+        for (int y = pil.ybegin; y < pil.yend; ++y)
+            for (int x = pil.xbegin; x < pil.xend; ++x) {
+                const size_t i = in.index(x, y);
+                if (in.cls[i] & kFitPoint)
+                    s[size_t(y - pil.ybegin) * size_t(pil.width())
+                      + size_t(x - pil.xbegin)] = std::sqrt(std::max(in.vs[i], 0.0f));
+            }
+    }
+
+    // Its hat diagonal by Monte-Carlo SURE (Ramani, Blu & Unser 2008): the
+    // quotient nudged by +-kNudge times the local light level (the 7x7 mean
+    // of |z_l|, a function of the frame's pixels only, so that every strip
+    // nudges a pixel alike) over everything the nudged run reads.
+    ROI qreg    = halo_region(pil, frame, filter_halo(base));
+    qreg.chbegin = 0;
+    qreg.chend   = nch;
+    std::vector<float> q = read(quotient, qreg, 0, nch);
+    std::vector<float> scale(qreg.npixels(), 0.0f);
+    {
+        const ROI lreg = halo_region(qreg, frame, kScaleRadius);
+        const std::vector<float> zq = read(quotient, lreg, 0, 3);
+        for (int y = qreg.ybegin; y < qreg.yend; ++y)
+            for (int x = qreg.xbegin; x < qreg.xend; ++x) {
+                double sum = 0.0;
+                int n      = 0;
+                for (int v = std::max(y - kScaleRadius, lreg.ybegin);
+                     v < std::min(y + kScaleRadius + 1, lreg.yend); ++v)
+                    for (int u = std::max(x - kScaleRadius, lreg.xbegin);
+                         u < std::min(x + kScaleRadius + 1, lreg.xend); ++u) {
+                        const float l = luminance(&zq[3 * (size_t(v - lreg.ybegin) * size_t(lreg.width())
+                                                           + size_t(u - lreg.xbegin))]);
+                        if (std::isfinite(l))
+                            sum += std::fabs(l), ++n;
+                    }
+                const size_t j = size_t(y - qreg.ybegin) * size_t(qreg.width())
+                                 + size_t(x - qreg.xbegin);
+                scale[j] = n ? float(kNudge * sum / n) : 0.0f;
+                const float d = nudge_sign(x - frame.xbegin, y - frame.ybegin) * scale[j];
+                for (int c = 0; c < 3; ++c)
+                    q[size_t(nch) * j + size_t(c)] += d;
+            }
+    }
+    ImageSpec qspec = quotient.spec();
+    qspec.x = qreg.xbegin, qspec.y = qreg.ybegin;
+    qspec.width = qreg.width(), qspec.height = qreg.height();
+    qspec.set_format(TypeFloat);
+    ImageBuf nudged(qspec);
+    nudged.set_pixels(qreg, TypeFloat, q.data());
+    q = {};
+    base.diagnostics = nullptr;
+    base.progress    = progress(0.4f, 0.8f);
+    if (!regression_filter(nudged_out0, nudged, albedo, guides, base, nullptr,
+                           pil, nthreads))
+        return fail(nudged_out0);
+    const std::vector<float> o0n = read(nudged_out0, pil, 0, 3);
+    ImageBuf pilot = float_image(pil, frame, 4);
+    std::vector<float> d0(np, 1.0f);  // candidate 0's hat diagonal
+    {
+        std::vector<float> pv(4 * np);
+        for (size_t i = 0; i < np; ++i) {
+            const int x = pil.xbegin + int(i % size_t(pil.width()));
+            const int y = pil.ybegin + int(i / size_t(pil.width()));
+            const float nudge = scale[size_t(y - qreg.ybegin) * size_t(qreg.width())
+                                      + size_t(x - qreg.xbegin)];
+            if (s[i] > 0.0f && nudge > 0.0f)
+                d0[i] = nudge_sign(x - frame.xbegin, y - frame.ybegin)
+                        * (luminance(&o0n[3 * i]) - luminance(&o0[3 * i])) / nudge;
+            for (int c = 0; c < 3; ++c)
+                pv[4 * i + c] = o0[3 * i + c];
+            // The pilot's variance ~ sum_j H_qj^2 sigma_j^2 ~ D sigma^2.
+            pv[4 * i + 3] = s[i] * s[i] * std::min(std::max(d0[i], 0.0f), 1.0f);
+        }
+        store(pilot, pil, pv);
+    }
+
+    // Candidate 1.
+    ImageBuf out1;
+    if (!feature_regression(out1, quotient, pilot, guides, fo, sel, nthreads))
+        return fail(out1);
+
+    // Risks over the selection's support: variance (0 at outliers and non
+    // fit points: no observation), relative-MSE weight.
+    const size_t ns = sel.npixels();
+    ImageBuf cand0 = float_image(sel, frame, 4), var = float_image(sel, frame, 1),
+             weight = float_image(sel, frame, 1);
+    {
+        const std::vector<float> z = read(quotient, sel, 0, 3);
+        const std::vector<float> a = read(albedo, sel, 0, 3);
+        std::vector<float> c0(4 * ns), v(ns), w(ns);
+        for (int y = sel.ybegin; y < sel.yend; ++y)
+            for (int x = sel.xbegin; x < sel.xend; ++x) {
+                const size_t k = size_t(y - sel.ybegin) * size_t(sel.width())
+                                 + size_t(x - sel.xbegin);
+                const size_t i = size_t(y - pil.ybegin) * size_t(pil.width())
+                                 + size_t(x - pil.xbegin);
+                for (int c = 0; c < 3; ++c)
+                    c0[4 * k + c] = o0[3 * i + c];
+                c0[4 * k + 3] = d0[i];
+                const float o_l = luminance(&o0[3 * i]);
+                const bool outlier = std::fabs(luminance(&z[3 * k]) - o_l)
+                                     > kOutlierSigmas * s[i];
+                v[k] = outlier ? 0.0f : s[i] * s[i];
+                // relMSE (x - ref)^2 / (ref^2 + 0.01) in radiance, written
+                // in z: radiance = z (a + albedo_eps).
+                const double al = std::max(luminance(&a[3 * k]), 0.0f)
+                                  + options.albedo_eps;
+                w[k] = float(al * al / (o_l * o_l * al * al + 0.01));
+            }
+        store(cand0, sel, c0);
+        store(var, sel, v);
+        store(weight, sel, w);
+    }
+    ImageBuf risk0, risk1, chosen;
+    if (!sure_risk(risk0, cand0, quotient, var, weight, sel, nthreads))
+        return fail(risk0);
+    if (!sure_risk(risk1, out1, quotient, var, weight, sel, nthreads))
+        return fail(risk1);
+    if (!select_by_risk(chosen, { &cand0, &out1 }, { &risk0, &risk1 }, so,
+                        nullptr, roi, nthreads))
+        return fail(chosen);
+
+    // The output: candidate 0 (every channel), with the chosen RGB at the
+    // fit points (elsewhere both candidates pass the pixel through).
+    std::vector<float> out = read(out0, roi, 0, nch);
+    const std::vector<float> rgb = read(chosen, roi, 0, 3);
+    for (int y = roi.ybegin; y < roi.yend; ++y)
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const size_t k = size_t(y - roi.ybegin) * size_t(roi.width())
+                             + size_t(x - roi.xbegin);
+            const size_t i = size_t(y - pil.ybegin) * size_t(pil.width())
+                             + size_t(x - pil.xbegin);
+            if (s[i] > 0.0f)
+                for (int c = 0; c < 3; ++c)
+                    out[size_t(nch) * k + size_t(c)] = rgb[3 * k + size_t(c)];
+        }
+    if (!dst.set_pixels(roi, TypeFloat, out.data())) {
+        dst.errorfmt("regression_filter: could not store the result");
+        return false;
+    }
+    if (options.diagnostics) {
+        if (!prepare_diagnostics(dst, *options.diagnostics, roi, frame,
+                                 "regression_filter"))
+            return false;
+        ROI r4    = roi;
+        r4.chbegin = 0;
+        r4.chend   = 4;
+        const std::vector<float> m = read(maps, r4, 0, 4);
+        options.diagnostics->set_pixels(r4, TypeFloat, m.data());
+    }
+    if (options.progress)
+        options.progress(1.0f);
+    return true;
+}
+
+}  // namespace detail
+}  // namespace zdenoise
