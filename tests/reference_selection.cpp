@@ -26,14 +26,18 @@ luma(const RefImage& img, int x, int y)
 /// Section 13.2's point set and features.
 struct Features {
     const RefImage& z;
+    const RefImage& albedo;
     const RefImage& pilot;
     const RefGuides& g;
     const zdenoise::FeatureRegressionOptions& o;
 
+    /// z to radiance.
+    float scale(int x, int y, int c) const { return albedo.at(x, y, c) + o.albedo_eps; }
     bool valid(int x, int y) const
     {
         for (int c = 0; c < 3; ++c)
-            if (!std::isfinite(z.at(x, y, c)) || std::fabs(z.at(x, y, c)) >= 1e18f)
+            if (!std::isfinite(z.at(x, y, c)) || std::fabs(z.at(x, y, c)) >= 1e18f
+                || !(scale(x, y, c) > 0.0f) || !std::isfinite(scale(x, y, c)))
                 return false;
         if (!std::isfinite(luma(pilot, x, y)))
             return false;
@@ -102,7 +106,8 @@ struct Features {
         if (n)
             d2 /= n;
         const double sp = double(px - x0) * (px - x0) + double(py - y0) * (py - y0);
-        return std::exp(-sp / (double(o.radius) * o.radius) - std::max(0.0, d2));
+        // Weights are floats: one too small for a float takes no part.
+        return double(float(std::exp(-sp / (double(o.radius) * o.radius) - std::max(0.0, d2))));
     }
 };
 
@@ -158,11 +163,11 @@ box(int w, int h, int x, int y, int r, Value&& value, double& sum, double& count
 
 
 RefImage
-feature_regression(const RefImage& z, const RefImage& pilot,
+feature_regression(const RefImage& z, const RefImage& albedo, const RefImage& pilot,
                    const RefGuides& guides,
                    const zdenoise::FeatureRegressionOptions& o)
 {
-    const Features F { z, pilot, guides, o };
+    const Features F { z, albedo, pilot, guides, o };
     const int w = z.w, h = z.h, r = o.radius, s = o.centre_stride;
     RefImage out(w, h, 4);
     for (int qy = 0; qy < h; ++qy)
@@ -181,8 +186,9 @@ feature_regression(const RefImage& z, const RefImage& pilot,
                     std::vector<std::vector<double>> M(nf, std::vector<double>(nf, 0.0));
                     std::vector<std::vector<double>> B(nf, std::vector<double>(3 + nf, 0.0));
                     double lo[3], hi[3];
+                    // The range of the radiance of the window's points.
                     for (int c = 0; c < 3; ++c)
-                        lo[c] = hi[c] = z.at(x0, y0, c);
+                        lo[c] = hi[c] = z.at(x0, y0, c) * F.scale(x0, y0, c);
                     for (int py = std::max(0, y0 - r); py <= std::min(h - 1, y0 + r); ++py)
                         for (int px = std::max(0, x0 - r); px <= std::min(w - 1, x0 + r); ++px) {
                             const double wj = F.weight(x0, y0, px, py);
@@ -196,8 +202,9 @@ feature_regression(const RefImage& z, const RefImage& pilot,
                                     B[a][size_t(c)] += wj * f[a] * z.at(px, py, c);
                             }
                             for (int c = 0; c < 3; ++c) {
-                                lo[c] = std::min(lo[c], double(z.at(px, py, c)));
-                                hi[c] = std::max(hi[c], double(z.at(px, py, c)));
+                                const float l = z.at(px, py, c) * F.scale(px, py, c);
+                                lo[c] = std::min(lo[c], double(l));
+                                hi[c] = std::max(hi[c], double(l));
                             }
                         }
                     const double m00 = M[0][0];
@@ -219,7 +226,8 @@ feature_regression(const RefImage& z, const RefImage& pilot,
                         double v = 0.0;
                         for (size_t a = 0; a < nf; ++a)
                             v += f[a] * B[a][size_t(c)];
-                        const double cl = std::min(std::max(v, lo[c]), hi[c]);
+                        const double a  = F.scale(qx, qy, c);
+                        const double cl = std::min(std::max(v, lo[c] / a), hi[c] / a);
                         if (cl == v)
                             hl += kLuma[c] * wq * quad;
                         acc[c] += wq * cl;

@@ -18,10 +18,12 @@
 namespace zdenoise_ref {
 
 /// Section 13.2: R, G, B of the filtered quotient and D = d out_l / d z_l.
-/// `pilot` has R, G, B and the variance of its luminance in channel 3.
+/// `albedo` demodulated z (the clamp's radiance); `pilot` has R, G, B and
+/// the variance of its luminance in channel 3.
 /// Centres lie on the lattice of options.centre_stride from (0, 0); the
 /// whole image is the frame.
-RefImage feature_regression(const RefImage& z, const RefImage& pilot,
+RefImage feature_regression(const RefImage& z, const RefImage& albedo,
+                            const RefImage& pilot,
                             const RefGuides& guides,
                             const zdenoise::FeatureRegressionOptions& options);
 

@@ -34,6 +34,8 @@ struct FeatureRegressionOptions {
     /// weight: a feature varying by less than about sqrt(ridge) over a
     /// window is left out of its fit rather than fitted to the noise.
     float ridge = 1e-3f;
+    /// As FilterOptions::albedo_eps: radiance = z (albedo + albedo_eps).
+    float albedo_eps = 1e-3f;
     /// The data window of the whole image (as FilterOptions::frame);
     /// undefined: the quotient's data window.
     ROI frame;
@@ -44,7 +46,9 @@ struct FeatureRegressionOptions {
 /// features [1, dx, dy, normal - its centre value, depth relative to the
 /// centre's], weights = same object id x spatial Gaussian x a patch weight
 /// that compares the pilot's patches around the centre and the point,
-/// splatted over the window with the same weights (collaboratively). The
+/// splatted over the window with the same weights (collaboratively), each
+/// prediction clamped so that its radiance stays within the radiance the
+/// window's points have (it invents no light). The
 /// weights read the pilot and guides only, never z, so the filter is linear
 /// in z and channel 3 of dst is exact: the hat-matrix diagonal D(q) =
 /// d out_l(q) / d z_l(q) that SURE needs (sure_risk()).
@@ -54,7 +58,10 @@ struct FeatureRegressionOptions {
 ///                  through (0 if not finite) with D = 1.
 /// @param quotient  Demodulated radiance z, channels 0-2. A point takes
 ///                  part when its three values are finite and it has a
-///                  surface (a valid depth, when the depth guide is given).
+///                  surface (a valid depth, when the depth guide is given):
+///                  NaN leaves a pixel out.
+/// @param albedo    The albedo z was demodulated by, channels 0-2: the
+///                  radiance bounds of the clamp.
 /// @param pilot     A prior estimate of z (e.g. regression_filter()'s
 ///                  output), channels 0-2, and in channel 3 the variance of
 ///                  its luminance: what the patch weight compares.
@@ -64,6 +71,7 @@ struct FeatureRegressionOptions {
 /// Every output pixel depends on inputs at most feature_regression_halo()
 /// away.
 ZDENOISE_API bool feature_regression(ImageBuf& dst, const ImageBuf& quotient,
+                                     const ImageBuf& albedo,
                                      const ImageBuf& pilot,
                                      const Guides& guides = {},
                                      const FeatureRegressionOptions& options = {},

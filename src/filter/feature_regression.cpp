@@ -35,6 +35,7 @@ struct Points {
     int width = 0;
     int nfeatures = 3;
     std::vector<float> z;        ///< 3 a pixel
+    std::vector<float> scale;    ///< La + albedo_eps, 3 a pixel: z to radiance
     std::vector<uint8_t> valid;  ///< takes part in fits
     std::vector<float> pilot_l;  ///< pilot luminance
     std::vector<float> pilot_v;  ///< variance of pilot_l
@@ -60,14 +61,18 @@ read(const ImageBuf& img, const ROI& region, int chbegin, int chend)
 }
 
 Points
-decode_points(const ImageBuf& quotient, const ImageBuf& pilot,
-              const Guides& guides, const ROI& region)
+decode_points(const ImageBuf& quotient, const ImageBuf& albedo,
+              const ImageBuf& pilot, const Guides& guides, const ROI& region,
+              float albedo_eps)
 {
     Points p;
     p.region = region;
     p.width  = region.width();
     const size_t npix = region.npixels();
     p.z = read(quotient, region, 0, 3);
+    p.scale = read(albedo, region, 0, 3);
+    for (float& a : p.scale)
+        a += albedo_eps;
     const std::vector<float> pl = read(pilot, region, 0, 4);
     p.pilot_l.resize(npix);
     p.pilot_v.resize(npix);
@@ -97,7 +102,8 @@ decode_points(const ImageBuf& quotient, const ImageBuf& pilot,
         bool ok = std::isfinite(p.pilot_l[i]);
         for (int c = 0; c < 3; ++c)
             ok = ok && std::isfinite(p.z[3 * i + c])
-                 && std::fabs(p.z[3 * i + c]) < detail::kLargestFitQuotient;
+                 && std::fabs(p.z[3 * i + c]) < detail::kLargestFitQuotient
+                 && p.scale[3 * i + c] > 0.0f && std::isfinite(p.scale[3 * i + c]);
         if (!p.normal.empty()) {
             float* n = &p.normal[3 * i];
             const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
@@ -125,7 +131,7 @@ struct WindowFit {
     int nf = 0;
     double beta[kMaxFeatures][3] = {};
     double chol[kMaxFeatures][kMaxFeatures] = {};
-    float lo[3] = {}, hi[3] = {};  ///< range of z over the weighted points
+    float lo[3] = {}, hi[3] = {};  ///< range of the radiance of the weighted points
 };
 
 /// The features of point j for the window centred on i0, relative to the
@@ -197,7 +203,7 @@ fit_window(const Points& p, const FeatureRegressionOptions& o,
     double M[kMaxFeatures][kMaxFeatures] = {}, B[kMaxFeatures][3] = {};
     fit.x0 = x0, fit.y0 = y0, fit.nf = nf;
     for (int c = 0; c < 3; ++c)
-        fit.lo[c] = fit.hi[c] = p.z[3 * i0 + c];
+        fit.lo[c] = fit.hi[c] = p.z[3 * i0 + c] * p.scale[3 * i0 + c];
     for (int y = std::max(y0 - r, clip.ybegin); y <= std::min(y0 + r, clip.yend - 1); ++y)
         for (int x = std::max(x0 - r, clip.xbegin); x <= std::min(x0 + r, clip.xend - 1); ++x) {
             const float w = point_weight(p, o, x0, y0, x, y);
@@ -213,8 +219,9 @@ fit_window(const Points& p, const FeatureRegressionOptions& o,
                     B[a][c] += w * f[a] * p.z[3 * j + c];
             }
             for (int c = 0; c < 3; ++c) {
-                fit.lo[c] = std::min(fit.lo[c], p.z[3 * j + c]);
-                fit.hi[c] = std::max(fit.hi[c], p.z[3 * j + c]);
+                const float l = p.z[3 * j + c] * p.scale[3 * j + c];
+                fit.lo[c] = std::min(fit.lo[c], l);
+                fit.hi[c] = std::max(fit.hi[c], l);
             }
         }
     // Ridge on the non-constant features relative to the window's weight:
@@ -267,8 +274,9 @@ struct Sums {
 };
 
 /// Splat one fitted window onto the output pixels of roi it covers: the
-/// prediction at each point, clamped to the range of z the window saw
-/// (no light beyond what the render has), with the fit's weight; and the
+/// prediction at each point, clamped so that its radiance stays within the
+/// range of radiance the window saw (no light beyond what the render has,
+/// as section 6 does), with the fit's weight; and the
 /// hat diagonal h = w x^T M^-1 x (0 where clamped: the value no longer
 /// moves with z there, up to the point attaining the bound).
 void
@@ -306,8 +314,9 @@ splat_window(const Points& p, const FeatureRegressionOptions& o,
                 double v = 0.0;
                 for (int a = 0; a < nf; ++a)
                     v += f[a] * fit.beta[a][c];
-                const double clamped = std::min(std::max(v, double(fit.lo[c])),
-                                                double(fit.hi[c]));
+                const double a = p.scale[3 * j + c];
+                const double clamped = std::min(std::max(v, fit.lo[c] / a),
+                                                fit.hi[c] / a);
                 if (clamped == v)
                     hl += detail::kLumaWeights[c] * w * q;
                 s.acc[3 * o_ + c] += w * clamped;
@@ -331,7 +340,8 @@ feature_regression_halo(const FeatureRegressionOptions& o)
 
 bool
 feature_regression(ImageBuf& dst, const ImageBuf& quotient,
-                   const ImageBuf& pilot, const Guides& guides,
+                   const ImageBuf& albedo, const ImageBuf& pilot,
+                   const Guides& guides,
                    const FeatureRegressionOptions& options, ROI roi,
                    int nthreads)
 {
@@ -355,6 +365,9 @@ feature_regression(ImageBuf& dst, const ImageBuf& quotient,
     if (!(o.patch_k > 0.0f) || !std::isfinite(o.patch_k))
         return dst.errorfmt("{}: option patch_k = {} is invalid: needs a "
                             "finite number > 0", opname, o.patch_k), false;
+    if (!(o.albedo_eps > 0.0f) || !std::isfinite(o.albedo_eps))
+        return dst.errorfmt("{}: option albedo_eps = {} is invalid: needs a "
+                            "finite number > 0", opname, o.albedo_eps), false;
     if (!(o.ridge >= 0.0f) || !std::isfinite(o.ridge))
         return dst.errorfmt("{}: option ridge = {} is invalid: needs a finite "
                             "number >= 0", opname, o.ridge), false;
@@ -362,6 +375,7 @@ feature_regression(ImageBuf& dst, const ImageBuf& quotient,
         return false;
     const ROI region = detail::halo_region(roi, o.frame, feature_regression_halo(o));
     if (!detail::check_input(dst, quotient, opname, "quotient", region, 3)
+        || !detail::check_input(dst, albedo, opname, "albedo", region, 3)
         || !detail::check_input(dst, pilot, opname, "pilot", region, 4))
         return false;
     struct NamedGuide {
@@ -386,7 +400,8 @@ feature_regression(ImageBuf& dst, const ImageBuf& quotient,
                             "output pixels", opname), false;
     }
 
-    const Points p = decode_points(quotient, pilot, guides, region);
+    const Points p = decode_points(quotient, albedo, pilot, guides, region,
+                                   o.albedo_eps);
     // Windows clip at the frame, whose part held here is the region.
     const ROI clip = region;
     // Centres: lattice points (anchored at the frame's origin) whose window

@@ -22,6 +22,7 @@
 
 #include "filter_inputs.h"
 #include "internal.h"
+#include "outliers.h"
 
 namespace zdenoise {
 namespace detail {
@@ -119,7 +120,8 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     FilterOptions base = options;
     base.select      = 0;
     FeatureRegressionOptions fo;
-    fo.frame = frame;
+    fo.frame      = frame;
+    fo.albedo_eps = options.albedo_eps;
     SelectionOptions so;
     so.frame = frame;
     const int nch = quotient.nchannels();
@@ -150,19 +152,32 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     // the filter, so that it is the same in any strip: the standard
     // deviation of z_l at fit points, else 0 (no observation).
     std::vector<float> s(np, 0.0f);
+    // What candidate 1 fits: the quotient of the fit points with the
+    // outliers capped (section 3a), NaN elsewhere, as candidate 0 fits it;
+    // the outliers' spread light is added to it as to candidate 0.
+    std::vector<float> zfit(3 * np, NAN);
+    std::vector<double> spread(3 * sel.npixels(), 0.0);
     {
+        // The decode reaches the receivers of every outlier within r_max
+        // of the selection's pixels, and the noise estimate's footprint.
         FilterInputs in;
+        const int reach = std::max(feature_regression_halo(fo), 2 * base.r_max);
         if (!decode_filter_inputs(in, dst, quotient, albedo, guides, base,
-                                  halo_region(pil, frame, kNoiseFootprint),
+                                  halo_region(sel, frame, reach + kNoiseFootprint),
                                   nthreads))
             return false;
         for (int y = pil.ybegin; y < pil.yend; ++y)
             for (int x = pil.xbegin; x < pil.xend; ++x) {
                 const size_t i = in.index(x, y);
-                if (in.cls[i] & kFitPoint)
-                    s[size_t(y - pil.ybegin) * size_t(pil.width())
-                      + size_t(x - pil.xbegin)] = std::sqrt(std::max(in.vs[i], 0.0f));
+                const size_t k = size_t(y - pil.ybegin) * size_t(pil.width())
+                                 + size_t(x - pil.xbegin);
+                if (in.cls[i] & kFitPoint) {
+                    s[k] = std::sqrt(std::max(in.vs[i], 0.0f));
+                    for (int c = 0; c < 3; ++c)
+                        zfit[3 * k + size_t(c)] = in.zfit[c][i];
+                }
             }
+        spread_outliers(in, base, sel, spread, nthreads);
     }
 
     // Its hat diagonal by Monte-Carlo SURE (Ramani, Blu & Unser 2008): the
@@ -231,10 +246,20 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         store(pilot, pil, pv);
     }
 
-    // Candidate 1.
-    ImageBuf out1;
-    if (!feature_regression(out1, quotient, pilot, guides, fo, sel, nthreads))
+    // Candidate 1, and the outliers' light.
+    ImageBuf out1, fitted = float_image(pil, frame, 3);
+    store(fitted, pil, zfit);
+    zfit = {};
+    if (!feature_regression(out1, fitted, albedo, pilot, guides, fo, sel, nthreads))
         return fail(out1);
+    {
+        std::vector<float> c1 = read(out1, sel, 0, 4);
+        for (size_t k = 0; k < sel.npixels(); ++k)
+            for (int c = 0; c < 3; ++c)
+                c1[4 * k + size_t(c)] = float(double(c1[4 * k + size_t(c)])
+                                              + spread[3 * k + size_t(c)]);
+        store(out1, sel, c1);
+    }
 
     // Risks over the selection's support: variance (0 at outliers and non
     // fit points: no observation), relative-MSE weight.
