@@ -411,8 +411,12 @@ TEST(SelectByRisk, TwoRegionsGetTheirFiltersWithoutASeam)
 TEST(SelectedFilter, PartsAndThreadsGiveTheWholeImage)
 {
     const synth::Scene s = synth::staircase(56, 84, 8, { 8, 808 });
+    for (bool halves : { false, true }) {
+    SCOPED_TRACE(halves ? "risk from the halves" : "risk from SURE");
     zdenoise::Guides g;
     g.normal = &s.normal, g.depth = &s.depth, g.object_id = &s.object_id;
+    if (halves)
+        g.half_a = &s.half_a, g.half_b = &s.half_b;
     zdenoise::FilterOptions opt;
     opt.r_max  = 8;
     opt.select = 1;
@@ -430,6 +434,7 @@ TEST(SelectedFilter, PartsAndThreadsGiveTheWholeImage)
             EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * 4), 0)
                 << "threads " << nt << ", roi y " << roi.ybegin << "-" << roi.yend;
         }
+    }
 }
 
 TEST(SelectedFilter, NeverWorseThanTodaysFilterAndKeepsTheLight)
@@ -437,9 +442,12 @@ TEST(SelectedFilter, NeverWorseThanTodaysFilterAndKeepsTheLight)
     for (const synth::Scene& s : { synth::sawtooth(64, 48, 4, { 4, 3 }),
                                    synth::shadow_edge(64, 48, { 4, 3 }),
                                    synth::fine_texture(64, 48, { 4, 3 }) }) {
-        SCOPED_TRACE(s.name);
+        for (bool halves : { false, true }) {
+        SCOPED_TRACE(s.name + (halves ? ", risk from the halves" : ", risk from SURE"));
         zdenoise::Guides g;
         g.normal = &s.normal, g.depth = &s.depth, g.object_id = &s.object_id;
+        if (halves)
+            g.half_a = &s.half_a, g.half_b = &s.half_b;
         zdenoise::FilterOptions today, selected;
         selected.select = 1;
         const ImageBuf a = zdenoise::denoise(s.noisy, s.albedo, g, today);
@@ -451,11 +459,12 @@ TEST(SelectedFilter, NeverWorseThanTodaysFilterAndKeepsTheLight)
         const double ma = synth::mean_luminance(a, 0, s.w, 0, s.h);
         const double mb = synth::mean_luminance(b, 0, s.w, 0, s.h);
         const double mc = synth::mean_luminance(s.clean, 0, s.w, 0, s.h);
-        std::printf("  %-14s relMSE today %.5f selected %.5f, energy %.4f %.4f\n",
-                    s.name.c_str(), ea, eb, ma / mc, mb / mc);
+        std::printf("  %-14s %-6s relMSE today %.5f selected %.5f, energy %.4f %.4f\n",
+                    s.name.c_str(), halves ? "halves" : "SURE", ea, eb, ma / mc, mb / mc);
         // Today's filter loses a few percent of the light of 4-sample gamma
         // noise (docs/LIGHT.md); the selection must not lose more.
         EXPECT_LE(std::fabs(mb / mc - 1.0), std::fabs(ma / mc - 1.0) + 0.005);
+        }
     }
 }
 

@@ -3,12 +3,16 @@
 //
 // regression_filter() with FilterOptions::select = 1 (docs/FILTER.md
 // section 13): two candidates and the per-pixel choice between them by
-// Stein's unbiased risk estimate. Stages, in order:
+// their estimated error. Stages, in order:
 //   regression_filter()   candidate 0, today's filter, and its noise map
-//   hat_diagonal()        its D by Monte-Carlo SURE: one more run on the
-//                         quotient nudged by +-0.1 sigma per pixel
+//   decode_filter_inputs() what candidate 1 fits (outliers capped) and the
+//                         outliers' spread light
+//   without halves: hat diagonal of candidate 0 by Monte-Carlo SURE (one
+//                         more run on the quotient nudged by +-2 %)
+//   with halves:   both candidates on each half alone
 //   feature_regression()  candidate 1, with candidate 0 as its pilot
-//   sure_risk()           each candidate's risk, relative-MSE weighted
+//   sure_risk() or halves_risk()  each candidate's risk, relative-MSE
+//                         weighted
 //   select_by_risk()      the choice map and the blend
 
 #include "selected_filter.h"
@@ -142,7 +146,7 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     // Candidate 0 over the pilot's support (with its maps if asked for).
     ImageBuf out0, maps, nudged_out0;
     base.diagnostics = options.diagnostics ? &maps : nullptr;
-    base.progress    = progress(0.0f, 0.4f);
+    base.progress    = progress(0.0f, guides.half_a && guides.half_b ? 0.3f : 0.4f);
     if (!regression_filter(out0, quotient, albedo, guides, base, stats, pil,
                            nthreads))
         return fail(out0);
@@ -180,56 +184,107 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         spread_outliers(in, base, sel, spread, nthreads);
     }
 
-    // Its hat diagonal by Monte-Carlo SURE (Ramani, Blu & Unser 2008): the
-    // quotient nudged by +-kNudge times the local light level (the 7x7 mean
-    // of |z_l|, a function of the frame's pixels only, so that every strip
-    // nudges a pixel alike) over everything the nudged run reads.
     ROI qreg    = halo_region(pil, frame, filter_halo(base));
     qreg.chbegin = 0;
     qreg.chend   = nch;
-    std::vector<float> q = read(quotient, qreg, 0, nch);
-    std::vector<float> scale(qreg.npixels(), 0.0f);
-    {
-        const ROI lreg = halo_region(qreg, frame, kScaleRadius);
-        const std::vector<float> zq = read(quotient, lreg, 0, 3);
-        for (int y = qreg.ybegin; y < qreg.yend; ++y)
-            for (int x = qreg.xbegin; x < qreg.xend; ++x) {
-                double sum = 0.0;
-                int n      = 0;
-                for (int v = std::max(y - kScaleRadius, lreg.ybegin);
-                     v < std::min(y + kScaleRadius + 1, lreg.yend); ++v)
-                    for (int u = std::max(x - kScaleRadius, lreg.xbegin);
-                         u < std::min(x + kScaleRadius + 1, lreg.xend); ++u) {
-                        const float l = luminance(&zq[3 * (size_t(v - lreg.ybegin) * size_t(lreg.width())
-                                                           + size_t(u - lreg.xbegin))]);
-                        if (std::isfinite(l))
-                            sum += std::fabs(l), ++n;
-                    }
-                const size_t j = size_t(y - qreg.ybegin) * size_t(qreg.width())
-                                 + size_t(x - qreg.xbegin);
-                scale[j] = n ? float(kNudge * sum / n) : 0.0f;
-                const float d = nudge_sign(x - frame.xbegin, y - frame.ybegin) * scale[j];
-                for (int c = 0; c < 3; ++c)
-                    q[size_t(nch) * j + size_t(c)] += d;
-            }
-    }
-    ImageSpec qspec = quotient.spec();
-    qspec.x = qreg.xbegin, qspec.y = qreg.ybegin;
-    qspec.width = qreg.width(), qspec.height = qreg.height();
-    qspec.set_format(TypeFloat);
-    ImageBuf nudged(qspec);
-    nudged.set_pixels(qreg, TypeFloat, q.data());
-    q = {};
     base.diagnostics = nullptr;
-    base.progress    = progress(0.4f, 0.8f);
-    if (!regression_filter(nudged_out0, nudged, albedo, guides, base, nullptr,
-                           pil, nthreads))
-        return fail(nudged_out0);
-    const std::vector<float> o0n = read(nudged_out0, pil, 0, 3);
-    ImageBuf pilot = float_image(pil, frame, 4);
-    std::vector<float> d0(np, 1.0f);  // candidate 0's hat diagonal
-    {
-        std::vector<float> pv(4 * np);
+    std::vector<float> d0(np, 1.0f);         // candidate 0's hat diagonal
+    std::vector<float> pilot_var(np, 0.0f);  // variance of its luminance
+    // With halves: both candidates on each half alone, whose cross errors
+    // rank them (halves_risk()) with no noise estimate and no D.
+    const bool halves = guides.half_a && guides.half_b;
+    ImageBuf half_z[2], half_out0[2], half_out1[2];
+    if (halves) {
+        Guides own   = guides;  // each half estimates its own noise
+        own.half_a   = own.half_b = nullptr;
+        own.variance = nullptr;
+        const ImageBuf* half[2] = { guides.half_a, guides.half_b };
+        std::vector<float> lum[2];
+        for (int k = 0; k < 2; ++k) {
+            if (!demodulate(half_z[k], *half[k], albedo, options.albedo_eps, qreg,
+                            nthreads))
+                return fail(half_z[k]);
+            base.progress = progress(0.3f + 0.25f * float(k), 0.55f + 0.25f * float(k));
+            if (!regression_filter(half_out0[k], half_z[k], albedo, own, base,
+                                   nullptr, pil, nthreads))
+                return fail(half_out0[k]);
+            const std::vector<float> o = read(half_out0[k], pil, 0, 3);
+            lum[k].resize(np);
+            for (size_t i = 0; i < np; ++i)
+                lum[k][i] = luminance(&o[3 * i]);
+        }
+        // The two filtered halves differ by their noise (and little bias):
+        // E (F(A) - F(B))^2 = 2 Var F(half) ~ 4 Var F(A + B) / 2.
+        std::vector<float> dif2(np, 0.0f);
+        for (size_t i = 0; i < np; ++i)
+            if (s[i] > 0.0f) {
+                dif2[i]      = (lum[0][i] - lum[1][i]) * (lum[0][i] - lum[1][i]);
+                pilot_var[i] = 0.25f * dif2[i];
+            }
+        for (int k = 0; k < 2; ++k) {
+            const std::vector<float> o = read(half_out0[k], pil, 0, 3);
+            const std::vector<float> z = read(half_z[k], pil, 0, 3);
+            std::vector<float> pv(4 * np), fz(3 * np, NAN);
+            for (size_t i = 0; i < np; ++i) {
+                for (int c = 0; c < 3; ++c) {
+                    pv[4 * i + c] = o[3 * i + c];
+                    if (s[i] > 0.0f)
+                        fz[3 * i + c] = z[3 * i + c];
+                }
+                pv[4 * i + 3] = 0.5f * dif2[i];
+            }
+            ImageBuf pilot_k = float_image(pil, frame, 4), fitted_k = float_image(pil, frame, 3);
+            store(pilot_k, pil, pv);
+            store(fitted_k, pil, fz);
+            if (!feature_regression(half_out1[k], fitted_k, albedo, pilot_k, own,
+                                    fo, sel, nthreads))
+                return fail(half_out1[k]);
+        }
+    } else {
+        // Without: candidate 0's hat diagonal by Monte-Carlo SURE (Ramani,
+        // Blu & Unser 2008): the quotient nudged by +-kNudge times the
+        // local light level (the 7x7 mean of |z_l|, a function of the
+        // frame's pixels only, so that every strip nudges a pixel alike)
+        // over everything the nudged run reads.
+        std::vector<float> q = read(quotient, qreg, 0, nch);
+        std::vector<float> scale(qreg.npixels(), 0.0f);
+        {
+            const ROI lreg = halo_region(qreg, frame, kScaleRadius);
+            const std::vector<float> zq = read(quotient, lreg, 0, 3);
+            for (int y = qreg.ybegin; y < qreg.yend; ++y)
+                for (int x = qreg.xbegin; x < qreg.xend; ++x) {
+                    double sum = 0.0;
+                    int n      = 0;
+                    for (int v = std::max(y - kScaleRadius, lreg.ybegin);
+                         v < std::min(y + kScaleRadius + 1, lreg.yend); ++v)
+                        for (int u = std::max(x - kScaleRadius, lreg.xbegin);
+                             u < std::min(x + kScaleRadius + 1, lreg.xend); ++u) {
+                            const float l = luminance(
+                                &zq[3 * (size_t(v - lreg.ybegin) * size_t(lreg.width())
+                                         + size_t(u - lreg.xbegin))]);
+                            if (std::isfinite(l))
+                                sum += std::fabs(l), ++n;
+                        }
+                    const size_t j = size_t(y - qreg.ybegin) * size_t(qreg.width())
+                                     + size_t(x - qreg.xbegin);
+                    scale[j] = n ? float(kNudge * sum / n) : 0.0f;
+                    const float d = nudge_sign(x - frame.xbegin, y - frame.ybegin) * scale[j];
+                    for (int c = 0; c < 3; ++c)
+                        q[size_t(nch) * j + size_t(c)] += d;
+                }
+        }
+        ImageSpec qspec = quotient.spec();
+        qspec.x = qreg.xbegin, qspec.y = qreg.ybegin;
+        qspec.width = qreg.width(), qspec.height = qreg.height();
+        qspec.set_format(TypeFloat);
+        ImageBuf nudged(qspec);
+        nudged.set_pixels(qreg, TypeFloat, q.data());
+        q = {};
+        base.progress = progress(0.4f, 0.8f);
+        if (!regression_filter(nudged_out0, nudged, albedo, guides, base, nullptr,
+                               pil, nthreads))
+            return fail(nudged_out0);
+        const std::vector<float> o0n = read(nudged_out0, pil, 0, 3);
         for (size_t i = 0; i < np; ++i) {
             const int x = pil.xbegin + int(i % size_t(pil.width()));
             const int y = pil.ybegin + int(i / size_t(pil.width()));
@@ -238,10 +293,17 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
             if (s[i] > 0.0f && nudge > 0.0f)
                 d0[i] = nudge_sign(x - frame.xbegin, y - frame.ybegin)
                         * (luminance(&o0n[3 * i]) - luminance(&o0[3 * i])) / nudge;
+            // The pilot's variance sum_j H_qj^2 sigma_j^2 ~ D sigma^2.
+            pilot_var[i] = s[i] * s[i] * std::min(std::max(d0[i], 0.0f), 1.0f);
+        }
+    }
+    ImageBuf pilot = float_image(pil, frame, 4);
+    {
+        std::vector<float> pv(4 * np);
+        for (size_t i = 0; i < np; ++i) {
             for (int c = 0; c < 3; ++c)
                 pv[4 * i + c] = o0[3 * i + c];
-            // The pilot's variance ~ sum_j H_qj^2 sigma_j^2 ~ D sigma^2.
-            pv[4 * i + 3] = s[i] * s[i] * std::min(std::max(d0[i], 0.0f), 1.0f);
+            pv[4 * i + 3] = pilot_var[i];
         }
         store(pilot, pil, pv);
     }
@@ -294,10 +356,26 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         store(weight, sel, w);
     }
     ImageBuf risk0, risk1, chosen;
-    if (!sure_risk(risk0, cand0, quotient, var, weight, sel, nthreads))
-        return fail(risk0);
-    if (!sure_risk(risk1, out1, quotient, var, weight, sel, nthreads))
-        return fail(risk1);
+    if (halves) {
+        // No observation: a NaN weight leaves the pixel out of the averages.
+        std::vector<float> w = read(weight, sel, 0, 1);
+        const std::vector<float> v = read(var, sel, 0, 1);
+        for (size_t k = 0; k < ns; ++k)
+            if (!(v[k] > 0.0f))
+                w[k] = NAN;
+        store(weight, sel, w);
+        if (!halves_risk(risk0, half_out0[0], half_out0[1], half_z[0], half_z[1],
+                         weight, sel, nthreads))
+            return fail(risk0);
+        if (!halves_risk(risk1, half_out1[0], half_out1[1], half_z[0], half_z[1],
+                         weight, sel, nthreads))
+            return fail(risk1);
+    } else {
+        if (!sure_risk(risk0, cand0, quotient, var, weight, sel, nthreads))
+            return fail(risk0);
+        if (!sure_risk(risk1, out1, quotient, var, weight, sel, nthreads))
+            return fail(risk1);
+    }
     if (!select_by_risk(chosen, { &cand0, &out1 }, { &risk0, &risk1 }, so,
                         nullptr, roi, nthreads))
         return fail(chosen);
