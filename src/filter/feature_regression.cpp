@@ -129,6 +129,10 @@ decode_points(const ImageBuf& quotient, const ImageBuf& albedo,
 struct WindowFit {
     int x0 = 0, y0 = 0;
     int nf = 0;
+    /// The weight of each point of the window, (2 r + 1)^2 in rows: the
+    /// fit computes them and the splat reuses them (the patch distances
+    /// are most of the work).
+    std::vector<float> weight;
     double beta[kMaxFeatures][3] = {};
     double chol[kMaxFeatures][kMaxFeatures] = {};
     float lo[3] = {}, hi[3] = {};  ///< range of the radiance of the weighted points
@@ -202,11 +206,14 @@ fit_window(const Points& p, const FeatureRegressionOptions& o,
     const float inv_r = 1.0f / float(r);
     double M[kMaxFeatures][kMaxFeatures] = {}, B[kMaxFeatures][3] = {};
     fit.x0 = x0, fit.y0 = y0, fit.nf = nf;
+    const int side = 2 * r + 1;
+    fit.weight.assign(size_t(side) * size_t(side), 0.0f);
     for (int c = 0; c < 3; ++c)
         fit.lo[c] = fit.hi[c] = p.z[3 * i0 + c] * p.scale[3 * i0 + c];
     for (int y = std::max(y0 - r, clip.ybegin); y <= std::min(y0 + r, clip.yend - 1); ++y)
         for (int x = std::max(x0 - r, clip.xbegin); x <= std::min(x0 + r, clip.xend - 1); ++x) {
             const float w = point_weight(p, o, x0, y0, x, y);
+            fit.weight[size_t(y - y0 + r) * size_t(side) + size_t(x - x0 + r)] = w;
             if (!(w > 0.0f))
                 continue;
             const size_t j = p.index(x, y);
@@ -292,7 +299,8 @@ splat_window(const Points& p, const FeatureRegressionOptions& o,
     const int xhi = std::min({ fit.x0 + r, clip.xend - 1, roi.xend - 1 });
     for (int y = ylo; y <= yhi; ++y)
         for (int x = xlo; x <= xhi; ++x) {
-            const float w = point_weight(p, o, fit.x0, fit.y0, x, y);
+            const float w = fit.weight[size_t(y - fit.y0 + r) * size_t(2 * r + 1)
+                                       + size_t(x - fit.x0 + r)];
             if (!(w > 0.0f))
                 continue;
             const size_t j = p.index(x, y);

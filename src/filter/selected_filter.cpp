@@ -99,6 +99,22 @@ float_image(const ROI& r, const ROI& frame, int nch)
     return ImageBuf(spec);
 }
 
+/// The feature-regression candidates, after today's filter: NFOR's window
+/// (radius 9) and a wider one for light that is smooth over more than
+/// today's windows reach (the low-frequency residue at low spp), at a
+/// stride that keeps its cost per pixel that of the first.
+const std::vector<FeatureRegressionOptions>&
+feature_candidates()
+{
+    static const std::vector<FeatureRegressionOptions> table = [] {
+        FeatureRegressionOptions nfor, wide;
+        wide.radius        = 15;
+        wide.centre_stride = 5;
+        return std::vector<FeatureRegressionOptions> { nfor, wide };
+    }();
+    return table;
+}
+
 }  // namespace
 
 
@@ -108,9 +124,11 @@ selected_filter_halo(const FilterOptions& base)
     // The choice reads the candidates over its halo, the feature regression
     // the pilot (candidate 0) over its own, candidate 0 and its nudged run
     // the quotient over the filter's, and the nudge its 7x7.
-    return selection_halo(SelectionOptions {})
-           + feature_regression_halo(FeatureRegressionOptions {})
-           + filter_halo(base) + kScaleRadius;
+    int fo_halo = 0;
+    for (const FeatureRegressionOptions& c : feature_candidates())
+        fo_halo = std::max(fo_halo, feature_regression_halo(c));
+    return selection_halo(SelectionOptions {}) + fo_halo + filter_halo(base)
+           + kScaleRadius;
 }
 
 
@@ -123,14 +141,20 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     const ROI& frame = options.frame;
     FilterOptions base = options;
     base.select      = 0;
-    FeatureRegressionOptions fo;
-    fo.frame      = frame;
-    fo.albedo_eps = options.albedo_eps;
+    std::vector<FeatureRegressionOptions> fos;
+    int fo_halo = 0;
+    for (const FeatureRegressionOptions& c : feature_candidates()) {
+        fos.push_back(c);
+        fos.back().frame      = frame;
+        fos.back().albedo_eps = options.albedo_eps;
+        fo_halo = std::max(fo_halo, feature_regression_halo(c));
+    }
+    const size_t nf = fos.size();
     SelectionOptions so;
     so.frame = frame;
     const int nch = quotient.nchannels();
     ROI sel = halo_region(roi, frame, selection_halo(so));
-    ROI pil = halo_region(sel, frame, feature_regression_halo(fo));
+    ROI pil = halo_region(sel, frame, fo_halo);
     sel.chbegin = pil.chbegin = roi.chbegin = 0;
     sel.chend = pil.chend = roi.chend = nch;
     auto fail = [&](const ImageBuf& from) {
@@ -165,7 +189,7 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         // The decode reaches the receivers of every outlier within r_max
         // of the selection's pixels, and the noise estimate's footprint.
         FilterInputs in;
-        const int reach = std::max(feature_regression_halo(fo), 2 * base.r_max);
+        const int reach = std::max(fo_halo, 2 * base.r_max);
         if (!decode_filter_inputs(in, dst, quotient, albedo, guides, base,
                                   halo_region(sel, frame, reach + kNoiseFootprint),
                                   nthreads))
@@ -193,7 +217,9 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     // With halves: both candidates on each half alone, whose cross errors
     // rank them (halves_risk()) with no noise estimate and no D.
     const bool halves = guides.half_a && guides.half_b;
-    ImageBuf half_z[2], half_out0[2], half_out1[2];
+    ImageBuf half_z[2], half_out0[2];
+    std::vector<ImageBuf> half_out1[2] = { std::vector<ImageBuf>(nf),
+                                           std::vector<ImageBuf>(nf) };
     if (halves) {
         Guides own   = guides;  // each half estimates its own noise
         own.half_a   = own.half_b = nullptr;
@@ -236,9 +262,10 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
             ImageBuf pilot_k = float_image(pil, frame, 4), fitted_k = float_image(pil, frame, 3);
             store(pilot_k, pil, pv);
             store(fitted_k, pil, fz);
-            if (!feature_regression(half_out1[k], fitted_k, albedo, pilot_k, own,
-                                    fo, sel, nthreads))
-                return fail(half_out1[k]);
+            for (size_t f = 0; f < nf; ++f)
+                if (!feature_regression(half_out1[k][f], fitted_k, albedo, pilot_k,
+                                        own, fos[f], sel, nthreads))
+                    return fail(half_out1[k][f]);
         }
     } else {
         // Without: candidate 0's hat diagonal by Monte-Carlo SURE (Ramani,
@@ -309,18 +336,20 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     }
 
     // Candidate 1, and the outliers' light.
-    ImageBuf out1, fitted = float_image(pil, frame, 3);
+    std::vector<ImageBuf> out1(nf);
+    ImageBuf fitted = float_image(pil, frame, 3);
     store(fitted, pil, zfit);
     zfit = {};
-    if (!feature_regression(out1, fitted, albedo, pilot, guides, fo, sel, nthreads))
-        return fail(out1);
-    {
-        std::vector<float> c1 = read(out1, sel, 0, 4);
+    for (size_t f = 0; f < nf; ++f) {
+        if (!feature_regression(out1[f], fitted, albedo, pilot, guides, fos[f], sel,
+                                nthreads))
+            return fail(out1[f]);
+        std::vector<float> c1 = read(out1[f], sel, 0, 4);
         for (size_t k = 0; k < sel.npixels(); ++k)
             for (int c = 0; c < 3; ++c)
                 c1[4 * k + size_t(c)] = float(double(c1[4 * k + size_t(c)])
                                               + spread[3 * k + size_t(c)]);
-        store(out1, sel, c1);
+        store(out1[f], sel, c1);
     }
 
     // Risks over the selection's support: variance (0 at outliers and non
@@ -355,7 +384,8 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         store(var, sel, v);
         store(weight, sel, w);
     }
-    ImageBuf risk0, risk1, chosen;
+    ImageBuf risk0, chosen;
+    std::vector<ImageBuf> risk1(nf);
     if (halves) {
         // No observation: a NaN weight leaves the pixel out of the averages.
         std::vector<float> w = read(weight, sel, 0, 1);
@@ -367,17 +397,23 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         if (!halves_risk(risk0, half_out0[0], half_out0[1], half_z[0], half_z[1],
                          weight, sel, nthreads))
             return fail(risk0);
-        if (!halves_risk(risk1, half_out1[0], half_out1[1], half_z[0], half_z[1],
-                         weight, sel, nthreads))
-            return fail(risk1);
+        for (size_t f = 0; f < nf; ++f)
+            if (!halves_risk(risk1[f], half_out1[0][f], half_out1[1][f], half_z[0],
+                             half_z[1], weight, sel, nthreads))
+                return fail(risk1[f]);
     } else {
         if (!sure_risk(risk0, cand0, quotient, var, weight, sel, nthreads))
             return fail(risk0);
-        if (!sure_risk(risk1, out1, quotient, var, weight, sel, nthreads))
-            return fail(risk1);
+        for (size_t f = 0; f < nf; ++f)
+            if (!sure_risk(risk1[f], out1[f], quotient, var, weight, sel, nthreads))
+                return fail(risk1[f]);
     }
-    if (!select_by_risk(chosen, { &cand0, &out1 }, { &risk0, &risk1 }, so,
-                        nullptr, roi, nthreads))
+    std::vector<const ImageBuf*> candidates = { &cand0 }, risks = { &risk0 };
+    for (size_t f = 0; f < nf; ++f) {
+        candidates.push_back(&out1[f]);
+        risks.push_back(&risk1[f]);
+    }
+    if (!select_by_risk(chosen, candidates, risks, so, nullptr, roi, nthreads))
         return fail(chosen);
 
     // The output: candidate 0 (every channel), with the chosen RGB at the
