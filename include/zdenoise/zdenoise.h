@@ -105,10 +105,12 @@ struct FilterOptions {
     /// twice as fast and better on the whole public benchmark
     /// (docs/FILTER.md section 9).
     float radius_growth = 2.0f;
-    /// 1 = each pixel takes, by its estimated error, today's filter or the
-    /// feature regression (docs/FILTER.md section 13, include/zdenoise/
-    /// selection.h); 0 = today's filter alone (the default: see
-    /// docs/SELECTION.md for why, measured).
+    /// 1 = each pixel takes, by its estimated error (Stein's unbiased risk
+    /// estimate, or the halves' cross error when half_a and half_b are
+    /// given), today's filter or one of two feature regressions
+    /// (docs/FILTER.md section 13, include/zdenoise/selection.h); 0 =
+    /// today's filter alone, the default while selection costs about 3x
+    /// the time (docs/SELECTION.md section 9).
     int select = 0;
 
     /// Optional progress report with the fraction done in [0,1], called from
