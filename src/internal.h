@@ -18,6 +18,14 @@ using OIIO::ROI;
 /// Rec.709 luminance weights: the scalar view of an RGB quotient.
 constexpr float kLumaWeights[3] = { 0.2126f, 0.7152f, 0.0722f };
 
+/// The luminance of an RGB triple, in float (the same rounding everywhere).
+inline float
+luminance(const float* rgb)
+{
+    return kLumaWeights[0] * rgb[0] + kLumaWeights[1] * rgb[1]
+           + kLumaWeights[2] * rgb[2];
+}
+
 /// Is an albedo channel value demodulated (docs/FILTER.md section 1)?
 /// The single definition used by demodulate, the filter and remodulate, so
 /// that the three agree pixel for pixel. An albedo above 1/albedo_eps is

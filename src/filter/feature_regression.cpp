@@ -19,6 +19,7 @@
 
 #include <OpenImageIO/imagebufalgo_util.h>
 
+#include "filter_inputs.h"
 #include "internal.h"
 
 namespace zdenoise {
@@ -49,17 +50,6 @@ struct Points {
     }
 };
 
-std::vector<float>
-read(const ImageBuf& img, const ROI& region, int chbegin, int chend)
-{
-    ROI r    = region;
-    r.chbegin = chbegin;
-    r.chend   = chend;
-    std::vector<float> v(region.npixels() * size_t(chend - chbegin));
-    img.get_pixels(r, TypeFloat, v.data());
-    return v;
-}
-
 Points
 decode_points(const ImageBuf& quotient, const ImageBuf& albedo,
               const ImageBuf& pilot, const Guides& guides, const ROI& region,
@@ -69,19 +59,19 @@ decode_points(const ImageBuf& quotient, const ImageBuf& albedo,
     p.region = region;
     p.width  = region.width();
     const size_t npix = region.npixels();
-    p.z = read(quotient, region, 0, 3);
-    p.scale = read(albedo, region, 0, 3);
+    p.z = detail::read_channels(quotient, region, 0, 3);
+    p.scale = detail::read_channels(albedo, region, 0, 3);
     for (float& a : p.scale)
         a += albedo_eps;
-    const std::vector<float> pl = read(pilot, region, 0, 4);
+    const std::vector<float> pl = detail::read_channels(pilot, region, 0, 4);
     p.pilot_l.resize(npix);
     p.pilot_v.resize(npix);
     p.valid.assign(npix, 0);
     std::vector<float> depth;
     if (guides.depth)
-        depth = read(*guides.depth, region, 0, 1);
+        depth = detail::read_channels(*guides.depth, region, 0, 1);
     if (guides.normal) {
-        p.normal = read(*guides.normal, region, 0, 3);
+        p.normal = detail::read_channels(*guides.normal, region, 0, 3);
         p.nfeatures += 3;
     }
     if (guides.depth) {
@@ -89,15 +79,13 @@ decode_points(const ImageBuf& quotient, const ImageBuf& albedo,
         p.nfeatures += 1;
     }
     if (guides.object_id) {
-        const std::vector<float> ids = read(*guides.object_id, region, 0, 1);
+        const std::vector<float> ids = detail::read_channels(*guides.object_id, region, 0, 1);
         p.id.resize(npix);
         std::memcpy(p.id.data(), ids.data(), npix * 4);
     }
     for (size_t i = 0; i < npix; ++i) {
         const float* pi = &pl[4 * i];
-        p.pilot_l[i] = detail::kLumaWeights[0] * pi[0]
-                       + detail::kLumaWeights[1] * pi[1]
-                       + detail::kLumaWeights[2] * pi[2];
+        p.pilot_l[i] = detail::luminance(pi);
         p.pilot_v[i] = std::isfinite(pi[3]) && pi[3] > 0.0f ? pi[3] : 0.0f;
         bool ok = std::isfinite(p.pilot_l[i]);
         for (int c = 0; c < 3; ++c)

@@ -15,6 +15,7 @@
 
 #include <OpenImageIO/imagebufalgo_util.h>
 
+#include "filter_inputs.h"
 #include "internal.h"
 
 namespace zdenoise {
@@ -22,24 +23,6 @@ namespace zdenoise {
 using namespace OIIO;
 
 namespace {
-
-std::vector<float>
-read(const ImageBuf& img, const ROI& region, int chbegin, int chend)
-{
-    ROI r    = region;
-    r.chbegin = chbegin;
-    r.chend   = chend;
-    std::vector<float> v(region.npixels() * size_t(chend - chbegin));
-    img.get_pixels(r, TypeFloat, v.data());
-    return v;
-}
-
-float
-luminance(const float* c)
-{
-    return detail::kLumaWeights[0] * c[0] + detail::kLumaWeights[1] * c[1]
-           + detail::kLumaWeights[2] * c[2];
-}
 
 /// A 1-channel float image over roi (frame: its full window).
 bool
@@ -130,12 +113,12 @@ sure_risk(ImageBuf& dst, const ImageBuf& candidate, const ImageBuf& quotient,
     return risk_image(dst, opname, candidate,
                       { { &variance, "variance" }, { &weight, "weight" } }, roi,
                       [&](std::vector<float>& out) {
-        const std::vector<float> c = read(candidate, roi, 0, 4);
-        const std::vector<float> z = read(quotient, roi, 0, 3);
-        const std::vector<float> v = read(variance, roi, 0, 1);
-        const std::vector<float> w = read(weight, roi, 0, 1);
+        const std::vector<float> c = detail::read_channels(candidate, roi, 0, 4);
+        const std::vector<float> z = detail::read_channels(quotient, roi, 0, 3);
+        const std::vector<float> v = detail::read_channels(variance, roi, 0, 1);
+        const std::vector<float> w = detail::read_channels(weight, roi, 0, 1);
         parallel_for(int64_t(0), int64_t(out.size()), [&](int64_t i) {
-            const double e   = double(luminance(&c[4 * i])) - luminance(&z[3 * i]);
+            const double e   = double(detail::luminance(&c[4 * i])) - detail::luminance(&z[3 * i]);
             const double var = v[size_t(i)];
             const double r   = w[size_t(i)] * (e * e - var + 2.0 * var * c[4 * i + 3]);
             out[size_t(i)]   = var > 0.0 && std::isfinite(r) ? float(r) : NAN;
@@ -161,14 +144,14 @@ halves_risk(ImageBuf& dst, const ImageBuf& candidate_a,
             return false;
     return risk_image(dst, opname, candidate_a, { { &weight, "weight" } }, roi,
                       [&](std::vector<float>& out) {
-        const std::vector<float> fa = read(candidate_a, roi, 0, 3);
-        const std::vector<float> fb = read(candidate_b, roi, 0, 3);
-        const std::vector<float> za = read(quotient_a, roi, 0, 3);
-        const std::vector<float> zb = read(quotient_b, roi, 0, 3);
-        const std::vector<float> w  = read(weight, roi, 0, 1);
+        const std::vector<float> fa = detail::read_channels(candidate_a, roi, 0, 3);
+        const std::vector<float> fb = detail::read_channels(candidate_b, roi, 0, 3);
+        const std::vector<float> za = detail::read_channels(quotient_a, roi, 0, 3);
+        const std::vector<float> zb = detail::read_channels(quotient_b, roi, 0, 3);
+        const std::vector<float> w  = detail::read_channels(weight, roi, 0, 1);
         parallel_for(int64_t(0), int64_t(out.size()), [&](int64_t i) {
-            const double ea = double(luminance(&fa[3 * i])) - luminance(&zb[3 * i]);
-            const double eb = double(luminance(&fb[3 * i])) - luminance(&za[3 * i]);
+            const double ea = double(detail::luminance(&fa[3 * i])) - detail::luminance(&zb[3 * i]);
+            const double eb = double(detail::luminance(&fb[3 * i])) - detail::luminance(&za[3 * i]);
             const double r  = w[size_t(i)] * 0.5 * (ea * ea + eb * eb);
             out[size_t(i)]  = std::isfinite(r) ? float(r) : NAN;
         }, paropt(nthreads));
@@ -234,7 +217,7 @@ select_by_risk(ImageBuf& dst, const std::vector<const ImageBuf*>& candidates,
     const size_t n = region.npixels();
     std::vector<std::vector<float>> r(static_cast<size_t>(K));
     for (int k = 0; k < K; ++k)
-        r[size_t(k)] = read(*risks[size_t(k)], region, 0, 1);
+        r[size_t(k)] = detail::read_channels(*risks[size_t(k)], region, 0, 1);
     // Choice: the candidate with the most negative mean risk difference to
     // candidate 0, where that is below -confidence standard errors.
     std::vector<int> choice(n, 0);
@@ -279,7 +262,7 @@ select_by_risk(ImageBuf& dst, const std::vector<const ImageBuf*>& candidates,
     roi3.chend   = 3;
     std::vector<double> acc(3 * nout, 0.0), total(nout, 0.0);
     for (int k = 0; k < K; ++k) {
-        const std::vector<float> c = read(*candidates[size_t(k)], roi3, 0, 3);
+        const std::vector<float> c = detail::read_channels(*candidates[size_t(k)], roi3, 0, 3);
         for (int y = roi.ybegin; y < roi.yend; ++y)
             for (int x = roi.xbegin; x < roi.xend; ++x) {
                 const size_t o_ = size_t(y - roi.ybegin) * size_t(roi.width())

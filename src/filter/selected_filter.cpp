@@ -72,23 +72,6 @@ nudge_sign(int x, int y)
     return (h & 1u) ? 1.0f : -1.0f;
 }
 
-float
-luminance(const float* c)
-{
-    return kLumaWeights[0] * c[0] + kLumaWeights[1] * c[1]
-           + kLumaWeights[2] * c[2];
-}
-
-std::vector<float>
-read(const ImageBuf& img, ROI r, int chbegin, int chend)
-{
-    r.chbegin = chbegin;
-    r.chend   = chend;
-    std::vector<float> v(r.npixels() * size_t(chend - chbegin));
-    img.get_pixels(r, TypeFloat, v.data());
-    return v;
-}
-
 /// Store `v` (all of img's channels a pixel) over the pixels of r.
 void
 store(ImageBuf& img, ROI r, const std::vector<float>& v)
@@ -239,7 +222,7 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                            nthreads))
         return fail(out0);
     const size_t np = pil.npixels();
-    const std::vector<float> o0 = read(out0, pil, 0, 3);
+    const std::vector<float> o0 = read_channels(out0, pil, 0, 3);
     // Its noise estimate (section 3), decoded with the footprint it has in
     // the filter, so that it is the same in any strip: the standard
     // deviation of z_l at fit points, else 0 (no observation).
@@ -300,7 +283,7 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
             if (!regression_filter(half_out0[k], half_z[k], albedo, own, base,
                                    nullptr, pil, nthreads))
                 return fail(half_out0[k]);
-            const std::vector<float> o = read(half_out0[k], pil, 0, 3);
+            const std::vector<float> o = read_channels(half_out0[k], pil, 0, 3);
             lum[k].resize(np);
             for (size_t i = 0; i < np; ++i)
                 lum[k][i] = luminance(&o[3 * i]);
@@ -314,8 +297,8 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                 pilot_var[i] = 0.25f * dif2[i];
             }
         for (int k = 0; k < 2; ++k) {
-            const std::vector<float> o = read(half_out0[k], pil, 0, 3);
-            const std::vector<float> z = read(half_z[k], pil, 0, 3);
+            const std::vector<float> o = read_channels(half_out0[k], pil, 0, 3);
+            const std::vector<float> z = read_channels(half_z[k], pil, 0, 3);
             std::vector<float> pv(4 * np), fz(3 * np, NAN);
             for (size_t i = 0; i < np; ++i) {
                 for (int c = 0; c < 3; ++c) {
@@ -339,11 +322,11 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         // local light level (the 7x7 mean of |z_l|, a function of the
         // frame's pixels only, so that every strip nudges a pixel alike)
         // over everything the nudged run reads.
-        std::vector<float> q = read(quotient, qreg, 0, nch);
+        std::vector<float> q = read_channels(quotient, qreg, 0, nch);
         std::vector<float> scale(qreg.npixels(), 0.0f);
         {
             const ROI lreg = halo_region(qreg, frame, kScaleRadius);
-            const std::vector<float> zq = read(quotient, lreg, 0, 3);
+            const std::vector<float> zq = read_channels(quotient, lreg, 0, 3);
             for (int y = qreg.ybegin; y < qreg.yend; ++y)
                 for (int x = qreg.xbegin; x < qreg.xend; ++x) {
                     double sum = 0.0;
@@ -377,7 +360,7 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         if (!regression_filter(nudged_out0, nudged, albedo, guides, base, nullptr,
                                pil, nthreads))
             return fail(nudged_out0);
-        const std::vector<float> o0n = read(nudged_out0, pil, 0, 3);
+        const std::vector<float> o0n = read_channels(nudged_out0, pil, 0, 3);
         for (size_t i = 0; i < np; ++i) {
             const int x = pil.xbegin + int(i % size_t(pil.width()));
             const int y = pil.ybegin + int(i / size_t(pil.width()));
@@ -410,7 +393,7 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         if (!feature_regression(out1[f], fitted, albedo, pilot, guides, fos[f], sel,
                                 nthreads))
             return fail(out1[f]);
-        std::vector<float> c1 = read(out1[f], sel, 0, 4);
+        std::vector<float> c1 = read_channels(out1[f], sel, 0, 4);
         for (size_t k = 0; k < sel.npixels(); ++k)
             for (int c = 0; c < 3; ++c) {
                 float& v      = c1[4 * k + size_t(c)];
@@ -429,8 +412,8 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     ImageBuf cand0 = float_image(sel, frame, 4), var = float_image(sel, frame, 1),
              weight = float_image(sel, frame, 1);
     {
-        const std::vector<float> z = read(quotient, sel, 0, 3);
-        const std::vector<float> a = read(albedo, sel, 0, 3);
+        const std::vector<float> z = read_channels(quotient, sel, 0, 3);
+        const std::vector<float> a = read_channels(albedo, sel, 0, 3);
         std::vector<float> c0(4 * ns), v(ns), w(ns);
         for (int y = sel.ybegin; y < sel.yend; ++y)
             for (int x = sel.xbegin; x < sel.xend; ++x) {
@@ -459,8 +442,8 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     std::vector<ImageBuf> risk1(nf);
     if (halves) {
         // No observation: a NaN weight leaves the pixel out of the averages.
-        std::vector<float> w = read(weight, sel, 0, 1);
-        const std::vector<float> v = read(var, sel, 0, 1);
+        std::vector<float> w = read_channels(weight, sel, 0, 1);
+        const std::vector<float> v = read_channels(var, sel, 0, 1);
         for (size_t k = 0; k < ns; ++k)
             if (!(v[k] > 0.0f))
                 w[k] = NAN;
@@ -489,8 +472,8 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
 
     // The output: candidate 0 (every channel), with the chosen RGB at the
     // fit points (elsewhere both candidates pass the pixel through).
-    std::vector<float> out = read(out0, roi, 0, nch);
-    const std::vector<float> rgb = read(chosen, roi, 0, 3);
+    std::vector<float> out = read_channels(out0, roi, 0, nch);
+    const std::vector<float> rgb = read_channels(chosen, roi, 0, 3);
     for (int y = roi.ybegin; y < roi.yend; ++y)
         for (int x = roi.xbegin; x < roi.xend; ++x) {
             const size_t k = size_t(y - roi.ybegin) * size_t(roi.width())
@@ -512,7 +495,7 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         ROI r4    = roi;
         r4.chbegin = 0;
         r4.chend   = 4;
-        const std::vector<float> m = read(maps, r4, 0, 4);
+        const std::vector<float> m = read_channels(maps, r4, 0, 4);
         options.diagnostics->set_pixels(r4, TypeFloat, m.data());
     }
     if (options.progress)

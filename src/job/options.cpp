@@ -288,9 +288,10 @@ options()
           "Radius tried after R: max(R+1, R*X) (2: radii 2, 4, 8,\n"
           "16; 1 = the method's R+1, as --preset spec)" }),
         parameter({ Kind::Whole, "--select", "select", FIELD(job.filter.select), "0|1",
-          "1: each pixel takes today's filter or a feature\n"
-          "regression, by its estimated error (SURE; about 2.5x\n"
-          "the time; docs/FILTER.md section 13) (0)" }),
+          "1: each pixel takes today's filter or one of two\n"
+          "feature regressions, by its estimated error (SURE, or\n"
+          "the halves' cross error; about 3x the time;\n"
+          "docs/FILTER.md section 13) (0)" }),
         always_written({ Kind::Whole, "--threads", "threads", FIELD(job.threads), "N",
           "Threads (default: all cores); results do not depend\n"
           "on it." }),
