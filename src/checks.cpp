@@ -57,6 +57,27 @@ check_input(ImageBuf& dst, const ImageBuf& img, const char* opname,
 
 
 bool
+check_guides(ImageBuf& dst, const Guides& guides, const char* opname,
+             const ROI& roi)
+{
+    struct NamedGuide {
+        const ImageBuf* buf;
+        const char* name;
+        int minchannels;
+    } named[] = { { guides.normal, "normal guide", 3 },
+                  { guides.depth, "depth guide", 1 },
+                  { guides.object_id, "object id guide", 1 },
+                  { guides.variance, "variance guide", 1 },
+                  { guides.half_a, "half buffer A", 3 },
+                  { guides.half_b, "half buffer B", 3 } };
+    for (const NamedGuide& g : named)
+        if (g.buf && !check_input(dst, *g.buf, opname, g.name, roi, g.minchannels))
+            return false;
+    return true;
+}
+
+
+bool
 check_frame(ImageBuf& dst, const char* opname, const ROI& roi,
             const ROI& frame)
 {
@@ -91,33 +112,50 @@ prepare_dst(ImageBuf& dst, const ImageBuf& src, ROI& roi, const char* opname)
 }
 
 
+OIIO::ImageSpec
+result_spec(const ROI& roi, const ROI& frame, int nch)
+{
+    ROI data    = roi;
+    data.chbegin = 0;
+    data.chend   = nch;
+    OIIO::ImageSpec spec(data, OIIO::TypeFloat);
+    spec.full_x      = frame.xbegin;
+    spec.full_y      = frame.ybegin;
+    spec.full_width  = frame.width();
+    spec.full_height = frame.height();
+    return spec;
+}
+
+
+bool
+prepare_result(ImageBuf& err, ImageBuf& img, const ROI& roi, const ROI& frame,
+               int nch, const char* opname, const char* what,
+               const std::vector<std::string>* names)
+{
+    if (!img.initialized()) {
+        OIIO::ImageSpec spec = result_spec(roi, frame, nch);
+        if (names)
+            spec.channelnames = *names;
+        img.reset(spec);
+        return true;
+    }
+    if (img.nchannels() < nch || !img.roi().contains(roi.xbegin, roi.ybegin)
+        || !img.roi().contains(roi.xend - 1, roi.yend - 1)) {
+        err.errorfmt("{}: {} needs {} channel{} over the output's pixels",
+                     opname, what, nch, nch == 1 ? "" : "s");
+        return false;
+    }
+    return true;
+}
+
+
 bool
 prepare_diagnostics(ImageBuf& dst, ImageBuf& maps, const ROI& roi,
                     const ROI& frame, const char* opname)
 {
     const std::vector<std::string>& names = diagnostic_channels();
-    const int n = int(names.size());
-    if (!maps.initialized()) {
-        ROI data    = roi;
-        data.chbegin = 0;
-        data.chend   = n;
-        OIIO::ImageSpec spec(data, OIIO::TypeFloat);
-        spec.full_x      = frame.xbegin;
-        spec.full_y      = frame.ybegin;
-        spec.full_width  = frame.width();
-        spec.full_height = frame.height();
-        spec.channelnames = names;
-        maps.reset(spec);
-        return true;
-    }
-    if (maps.nchannels() < n || !maps.roi().contains(roi.xbegin, roi.ybegin)
-        || !maps.roi().contains(roi.xend - 1, roi.yend - 1)) {
-        dst.errorfmt("{}: the diagnostics image needs {} channels over the "
-                     "output's pixels",
-                     opname, n);
-        return false;
-    }
-    return true;
+    return prepare_result(dst, maps, roi, frame, int(names.size()), opname,
+                          "the diagnostics image", &names);
 }
 
 }  // namespace detail

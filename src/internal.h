@@ -6,8 +6,12 @@
 #pragma once
 
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include <OpenImageIO/imagebuf.h>
+
+#include <zdenoise/zdenoise.h>
 
 namespace zdenoise {
 namespace detail {
@@ -62,6 +66,12 @@ bool
 check_input(ImageBuf& dst, const ImageBuf& img, const char* opname,
             const char* what, const ROI& roi, int minchannels);
 
+/// check_input() for every guide given (normal and halves 3 channels, the
+/// others 1), named as in the messages of regression_filter().
+bool
+check_guides(ImageBuf& dst, const Guides& guides, const char* opname,
+             const ROI& roi);
+
 /// Check that the output pixels `roi` lie in `frame` (FilterOptions::frame).
 bool
 check_frame(ImageBuf& dst, const char* opname, const ROI& roi,
@@ -84,6 +94,20 @@ returned_image(const char* opname, Op&& op)
 /// and set roi (default: src's data window) to the pixels to compute.
 bool
 prepare_dst(ImageBuf& dst, const ImageBuf& src, ROI& roi, const char* opname);
+
+/// The spec of a float result over roi (its data window) in the image
+/// `frame` (its display window), with nch channels of default names.
+OIIO::ImageSpec
+result_spec(const ROI& roi, const ROI& frame, int nch);
+
+/// Make `img` ready as a float result of `nch` channels over roi: allocated
+/// (result_spec(), with `names` when given) when uninitialised, else
+/// checked to hold roi and the channels (the error, naming the image as
+/// `what`, goes to err).
+bool
+prepare_result(ImageBuf& err, ImageBuf& img, const ROI& roi, const ROI& frame,
+               int nch, const char* opname, const char* what,
+               const std::vector<std::string>* names = nullptr);
 
 /// Make `maps` ready for FilterOptions::diagnostics over roi: allocated
 /// (float, diagnostic_channels(), data window roi, display window frame)

@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <string>
 
 #include <OpenImageIO/imagebufalgo_util.h>
 
@@ -374,27 +375,17 @@ feature_regression(ImageBuf& dst, const ImageBuf& quotient,
         || !detail::check_input(dst, albedo, opname, "albedo", region, 3)
         || !detail::check_input(dst, pilot, opname, "pilot", region, 4))
         return false;
-    struct NamedGuide {
-        const ImageBuf* buf;
-        const char* name;
-        int minchannels;
-    } named[] = { { guides.normal, "normal guide", 3 },
-                  { guides.depth, "depth guide", 1 },
-                  { guides.object_id, "object id guide", 1 } };
-    for (const NamedGuide& g : named)
-        if (g.buf && !detail::check_input(dst, *g.buf, opname, g.name, region, g.minchannels))
-            return false;
-    if (!dst.initialized()) {
-        ImageSpec spec(roi, TypeFloat);
-        spec.full_x = o.frame.xbegin, spec.full_y = o.frame.ybegin;
-        spec.full_width = o.frame.width(), spec.full_height = o.frame.height();
-        spec.channelnames = { "R", "G", "B", "D" };
-        dst.reset(spec);
-    } else if (dst.nchannels() < 4 || !dst.roi().contains(roi.xbegin, roi.ybegin)
-               || !dst.roi().contains(roi.xend - 1, roi.yend - 1)) {
-        return dst.errorfmt("{}: the destination needs 4 channels over the "
-                            "output pixels", opname), false;
-    }
+    // Only the geometric guides are read (variance and halves are not).
+    Guides read;
+    read.normal    = guides.normal;
+    read.depth     = guides.depth;
+    read.object_id = guides.object_id;
+    if (!detail::check_guides(dst, read, opname, region))
+        return false;
+    static const std::vector<std::string> channels = { "R", "G", "B", "D" };
+    if (!detail::prepare_result(dst, dst, roi, o.frame, 4, opname, "the destination",
+                                &channels))
+        return false;
 
     const Points p = decode_points(quotient, albedo, pilot, guides, region,
                                    o.albedo_eps);

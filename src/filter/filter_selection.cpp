@@ -24,29 +24,6 @@ using namespace OIIO;
 
 namespace {
 
-/// A 1-channel float image over roi (frame: its full window).
-bool
-prepare_plane(ImageBuf& dst, ROI roi, const ROI& frame, int nch,
-              const char* opname)
-{
-    roi.chbegin = 0;
-    roi.chend   = nch;
-    if (!dst.initialized()) {
-        ImageSpec spec(roi, TypeFloat);
-        spec.full_x = frame.xbegin, spec.full_y = frame.ybegin;
-        spec.full_width = frame.width(), spec.full_height = frame.height();
-        dst.reset(spec);
-        return true;
-    }
-    if (dst.nchannels() < nch || !dst.roi().contains(roi.xbegin, roi.ybegin)
-        || !dst.roi().contains(roi.xend - 1, roi.yend - 1)) {
-        dst.errorfmt("{}: the destination needs {} channel(s) over the output "
-                     "pixels", opname, nch);
-        return false;
-    }
-    return true;
-}
-
 /// A per-pixel risk over roi from `risk(i)`, each input read over roi.
 template<class Risk>
 bool
@@ -61,7 +38,7 @@ risk_image(ImageBuf& dst, const char* opname, const ImageBuf& first,
     for (const auto& in : inputs)
         if (!detail::check_input(dst, *in.first, opname, in.second, roi, 1))
             return false;
-    if (!prepare_plane(dst, roi, first.roi_full(), 1, opname))
+    if (!detail::prepare_result(dst, dst, roi, first.roi_full(), 1, opname, "the destination"))
         return false;
     std::vector<float> out(roi.npixels());
     risk(out);
@@ -209,8 +186,10 @@ select_by_risk(ImageBuf& dst, const std::vector<const ImageBuf*>& candidates,
             || !detail::check_input(dst, *risks[size_t(k)], opname, "risk",
                                     region, 1))
             return false;
-    if (!prepare_plane(dst, roi, o.frame, 3, opname)
-        || (weights && !prepare_plane(*weights, roi, o.frame, K, opname)))
+    if (!detail::prepare_result(dst, dst, roi, o.frame, 3, opname, "the destination")
+        || (weights
+            && !detail::prepare_result(dst, *weights, roi, o.frame, K, opname,
+                                       "the weights image")))
         return false;
 
     const int w = region.width(), h = region.height();

@@ -313,21 +313,8 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     if (!check_input(dst, quotient, opname, "quotient", need, 3)
         || !check_input(dst, albedo, opname, "albedo", need, 3))
         return false;
-    struct NamedGuide {
-        const ImageBuf* buf;
-        const char* name;
-        int minchannels;
-    } named[] = { { guides.normal, "normal guide", 3 },
-                  { guides.depth, "depth guide", 1 },
-                  { guides.object_id, "object id guide", 1 },
-                  { guides.variance, "variance guide", 1 },
-                  { guides.half_a, "half buffer A", 3 },
-                  { guides.half_b, "half buffer B", 3 } };
-    for (const NamedGuide& g : named)
-        if (g.buf
-            && !check_input(dst, *g.buf, opname, g.name, need,
-                            g.minchannels))
-            return false;
+    if (!check_guides(dst, guides, opname, need))
+        return false;
     if (!guides.variance && (!guides.half_a != !guides.half_b)) {
         dst.errorfmt("{}: half buffers need both A and B", opname);
         return false;

@@ -84,11 +84,7 @@ store(ImageBuf& img, ROI r, const std::vector<float>& v)
 ImageBuf
 float_image(const ROI& r, const ROI& frame, int nch)
 {
-    ImageSpec spec(r.width(), r.height(), nch, TypeFloat);
-    spec.x = r.xbegin, spec.y = r.ybegin;
-    spec.full_x = frame.xbegin, spec.full_y = frame.ybegin;
-    spec.full_width = frame.width(), spec.full_height = frame.height();
-    return ImageBuf(spec);
+    return ImageBuf(result_spec(r, frame, nch));
 }
 
 /// The feature-regression candidates, after today's filter: NFOR's window
