@@ -2,18 +2,18 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
 // regression_filter() with FilterOptions::select = 1 (docs/FILTER.md
-// section 13): two candidates and the per-pixel choice between them by
-// their estimated error. Stages, in order:
-//   regression_filter()   candidate 0, today's filter, and its noise map
-//   decode_filter_inputs() what candidate 1 fits (outliers capped) and the
-//                         outliers' spread light
-//   without halves: hat diagonal of candidate 0 by Monte-Carlo SURE (one
-//                         more run on the quotient nudged by +-2 %)
-//   with halves:   both candidates on each half alone
-//   feature_regression()  candidate 1, with candidate 0 as its pilot
+// section 13): today's filter and two feature regressions, and the
+// per-pixel choice among them by their estimated error. Stages, in order:
+//   regression_filter()    candidate 0, today's filter, and its maps
+//   decode_filter_inputs() what the feature regressions fit (outliers
+//                          capped), the outliers' spread light, and
+//                          radiance_bounds() of their output
+//   monte_carlo_hat_diagonal()  without halves: candidate 0's D
+//   filter_halves()        with halves: every candidate on each half alone
+//   feature_regression()   candidates 1 and 2, candidate 0 as their pilot
 //   sure_risk() or halves_risk()  each candidate's risk, relative-MSE
-//                         weighted
-//   select_by_risk()      the choice map and the blend
+//                          weighted
+//   select_by_risk()       the choice map and the blend
 
 #include "selected_filter.h"
 
@@ -21,6 +21,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 
 #include <OpenImageIO/imagebufalgo.h>
@@ -156,6 +157,152 @@ radiance_bounds(const FilterInputs& in, const ROI& out, int r_max,
         }
 }
 
+/// The largest halo of the feature-regression candidates.
+int
+feature_candidates_halo()
+{
+    int halo = 0;
+    for (const FeatureRegressionOptions& c : feature_candidates())
+        halo = std::max(halo, feature_regression_halo(c));
+    return halo;
+}
+
+/// Candidate 0's hat diagonal over `pil` by Monte-Carlo SURE (Ramani, Blu &
+/// Unser 2008): `base` run once more on the quotient nudged by +-kNudge
+/// times the local light level (the 7x7 mean of |z_l|, a function of the
+/// frame's pixels only, so that every strip nudges a pixel alike) over
+/// `qreg`, everything that run reads. `o0` is candidate 0's RGB over pil;
+/// d0 keeps 1 where `s` (the noise) is 0: no observation.
+bool
+monte_carlo_hat_diagonal(ImageBuf& dst, const ImageBuf& quotient,
+                         const ImageBuf& albedo, const Guides& guides,
+                         const FilterOptions& base, const ROI& pil,
+                         const ROI& qreg, const std::vector<float>& o0,
+                         const std::vector<float>& s, std::vector<float>& d0,
+                         int nthreads)
+{
+    const ROI& frame = base.frame;
+    const int nch    = quotient.nchannels();
+    std::vector<float> q = read_channels(quotient, qreg, 0, nch);
+    std::vector<float> scale(qreg.npixels(), 0.0f);
+    const ROI lreg = halo_region(qreg, frame, kScaleRadius);
+    const std::vector<float> zq = read_channels(quotient, lreg, 0, 3);
+    for (int y = qreg.ybegin; y < qreg.yend; ++y)
+        for (int x = qreg.xbegin; x < qreg.xend; ++x) {
+            double sum = 0.0;
+            int n      = 0;
+            for (int v = std::max(y - kScaleRadius, lreg.ybegin);
+                 v < std::min(y + kScaleRadius + 1, lreg.yend); ++v)
+                for (int u = std::max(x - kScaleRadius, lreg.xbegin);
+                     u < std::min(x + kScaleRadius + 1, lreg.xend); ++u) {
+                    const float l = luminance(
+                        &zq[3 * (size_t(v - lreg.ybegin) * size_t(lreg.width())
+                                 + size_t(u - lreg.xbegin))]);
+                    if (std::isfinite(l))
+                        sum += std::fabs(l), ++n;
+                }
+            const size_t j = size_t(y - qreg.ybegin) * size_t(qreg.width())
+                             + size_t(x - qreg.xbegin);
+            scale[j] = n ? float(kNudge * sum / n) : 0.0f;
+            const float d = nudge_sign(x - frame.xbegin, y - frame.ybegin) * scale[j];
+            for (int c = 0; c < 3; ++c)
+                q[size_t(nch) * j + size_t(c)] += d;
+        }
+    ImageSpec qspec = quotient.spec();
+    qspec.x = qreg.xbegin, qspec.y = qreg.ybegin;
+    qspec.width = qreg.width(), qspec.height = qreg.height();
+    qspec.set_format(TypeFloat);
+    ImageBuf nudged(qspec), nudged_out0;
+    nudged.set_pixels(qreg, TypeFloat, q.data());
+    q = {};
+    if (!regression_filter(nudged_out0, nudged, albedo, guides, base, nullptr,
+                           pil, nthreads)) {
+        dst.errorfmt("{}", nudged_out0.geterror());
+        return false;
+    }
+    const std::vector<float> o0n = read_channels(nudged_out0, pil, 0, 3);
+    d0.assign(pil.npixels(), 1.0f);
+    for (size_t i = 0; i < d0.size(); ++i) {
+        const int x = pil.xbegin + int(i % size_t(pil.width()));
+        const int y = pil.ybegin + int(i / size_t(pil.width()));
+        const float nudge = scale[size_t(y - qreg.ybegin) * size_t(qreg.width())
+                                  + size_t(x - qreg.xbegin)];
+        if (s[i] > 0.0f && nudge > 0.0f)
+            d0[i] = nudge_sign(x - frame.xbegin, y - frame.ybegin)
+                    * (luminance(&o0n[3 * i]) - luminance(&o0[3 * i])) / nudge;
+    }
+    return true;
+}
+
+/// The candidates run on each half's quotient alone (FILTER.md 13.3):
+/// candidate 0 over `pil` with its own noise estimate, then the feature
+/// regressions `fos` over `sel`, each with that half's candidate 0 as
+/// pilot and the pilot variance (F0(A)_l - F0(B)_l)^2 / 2 (two filtered
+/// halves differ by twice a half's filter variance), fitting the half's
+/// quotient at the fit points (`s` > 0). Also returns that squared
+/// difference over pil (0 where s is 0), and each half's quotient over
+/// `qreg`.
+bool
+filter_halves(ImageBuf& dst, const ImageBuf& albedo, const Guides& guides,
+              const FilterOptions& base,
+              const std::function<std::function<void(float)>(float, float)>& progress,
+              const std::vector<FeatureRegressionOptions>& fos, const ROI& sel,
+              const ROI& pil, const ROI& qreg, const std::vector<float>& s,
+              ImageBuf half_z[2], ImageBuf half_out0[2],
+              std::vector<ImageBuf> half_out1[2], std::vector<float>& dif2,
+              int nthreads)
+{
+    const ROI& frame = base.frame;
+    const size_t np  = pil.npixels();
+    auto fail = [&](const ImageBuf& from) {
+        dst.errorfmt("{}", from.geterror());
+        return false;
+    };
+    Guides own   = guides;  // each half estimates its own noise
+    own.half_a   = own.half_b = nullptr;
+    own.variance = nullptr;
+    const ImageBuf* half[2] = { guides.half_a, guides.half_b };
+    std::vector<float> o[2];
+    for (int k = 0; k < 2; ++k) {
+        if (!demodulate(half_z[k], *half[k], albedo, base.albedo_eps, qreg,
+                        nthreads))
+            return fail(half_z[k]);
+        FilterOptions opt = base;
+        opt.progress      = progress(0.3f + 0.25f * float(k), 0.55f + 0.25f * float(k));
+        if (!regression_filter(half_out0[k], half_z[k], albedo, own, opt, nullptr,
+                               pil, nthreads))
+            return fail(half_out0[k]);
+        o[k] = read_channels(half_out0[k], pil, 0, 3);
+    }
+    dif2.assign(np, 0.0f);
+    for (size_t i = 0; i < np; ++i)
+        if (s[i] > 0.0f) {
+            const float d = luminance(&o[0][3 * i]) - luminance(&o[1][3 * i]);
+            dif2[i]       = d * d;
+        }
+    for (int k = 0; k < 2; ++k) {
+        const std::vector<float> z = read_channels(half_z[k], pil, 0, 3);
+        std::vector<float> pv(4 * np), fz(3 * np, NAN);
+        for (size_t i = 0; i < np; ++i) {
+            for (int c = 0; c < 3; ++c) {
+                pv[4 * i + c] = o[k][3 * i + c];
+                if (s[i] > 0.0f)
+                    fz[3 * i + c] = z[3 * i + c];
+            }
+            pv[4 * i + 3] = 0.5f * dif2[i];
+        }
+        ImageBuf pilot = float_image(pil, frame, 4), fitted = float_image(pil, frame, 3);
+        store(pilot, pil, pv);
+        store(fitted, pil, fz);
+        half_out1[k].resize(fos.size());
+        for (size_t f = 0; f < fos.size(); ++f)
+            if (!feature_regression(half_out1[k][f], fitted, albedo, pilot, own,
+                                    fos[f], sel, nthreads))
+                return fail(half_out1[k][f]);
+    }
+    return true;
+}
+
 }  // namespace
 
 
@@ -165,11 +312,8 @@ selected_filter_halo(const FilterOptions& base)
     // The choice reads the candidates over its halo, the feature regression
     // the pilot (candidate 0) over its own, candidate 0 and its nudged run
     // the quotient over the filter's, and the nudge its 7x7.
-    int fo_halo = 0;
-    for (const FeatureRegressionOptions& c : feature_candidates())
-        fo_halo = std::max(fo_halo, feature_regression_halo(c));
-    return selection_halo(SelectionOptions {}) + fo_halo + filter_halo(base)
-           + kScaleRadius;
+    return selection_halo(SelectionOptions {}) + feature_candidates_halo()
+           + filter_halo(base) + kScaleRadius;
 }
 
 
@@ -182,24 +326,24 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     const ROI& frame = options.frame;
     FilterOptions base = options;
     base.select      = 0;
-    std::vector<FeatureRegressionOptions> fos;
-    int fo_halo = 0;
-    for (const FeatureRegressionOptions& c : feature_candidates()) {
-        fos.push_back(c);
-        fos.back().frame      = frame;
-        fos.back().albedo_eps = options.albedo_eps;
-        fo_halo = std::max(fo_halo, feature_regression_halo(c));
+    std::vector<FeatureRegressionOptions> fos = feature_candidates();
+    for (FeatureRegressionOptions& f : fos) {
+        f.frame      = frame;
+        f.albedo_eps = options.albedo_eps;
     }
-    const size_t nf = fos.size();
+    const size_t nf     = fos.size();
+    const int fo_halo   = feature_candidates_halo();
+    const bool halves   = guides.half_a && guides.half_b;
     SelectionOptions so;
     so.frame = frame;
-    if (guides.half_a && guides.half_b)
+    if (halves)
         so.confidence = kHalvesConfidence;
     const int nch = quotient.nchannels();
     ROI sel = halo_region(roi, frame, selection_halo(so));
     ROI pil = halo_region(sel, frame, fo_halo);
-    sel.chbegin = pil.chbegin = roi.chbegin = 0;
-    sel.chend = pil.chend = roi.chend = nch;
+    ROI qreg = halo_region(pil, frame, filter_halo(base));
+    sel.chbegin = pil.chbegin = qreg.chbegin = roi.chbegin = 0;
+    sel.chend = pil.chend = qreg.chend = roi.chend = nch;
     auto fail = [&](const ImageBuf& from) {
         dst.errorfmt("{}", from.geterror());
         return false;
@@ -211,21 +355,22 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     };
 
     // Candidate 0 over the pilot's support (with its maps if asked for).
-    ImageBuf out0, maps, nudged_out0;
+    ImageBuf out0, maps;
     base.diagnostics = options.diagnostics ? &maps : nullptr;
-    base.progress    = progress(0.0f, guides.half_a && guides.half_b ? 0.3f : 0.4f);
+    base.progress    = progress(0.0f, halves ? 0.3f : 0.4f);
     if (!regression_filter(out0, quotient, albedo, guides, base, stats, pil,
                            nthreads))
         return fail(out0);
+    base.diagnostics = nullptr;
     const size_t np = pil.npixels();
     const std::vector<float> o0 = read_channels(out0, pil, 0, 3);
     // Its noise estimate (section 3), decoded with the footprint it has in
     // the filter, so that it is the same in any strip: the standard
     // deviation of z_l at fit points, else 0 (no observation).
     std::vector<float> s(np, 0.0f);
-    // What candidate 1 fits: the quotient of the fit points with the
-    // outliers capped (section 3a), NaN elsewhere, as candidate 0 fits it;
-    // the outliers' spread light is added to it as to candidate 0.
+    // What the feature regressions fit: the quotient of the fit points with
+    // the outliers capped (section 3a), NaN elsewhere, as candidate 0 fits
+    // it; the outliers' spread light is added to them as to candidate 0.
     std::vector<float> zfit(3 * np, NAN);
     std::vector<double> spread(3 * sel.npixels(), 0.0);
     std::vector<float> bound_lo, bound_hi, bound_ia;
@@ -253,121 +398,29 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         radiance_bounds(in, sel, base.r_max, bound_lo, bound_hi, bound_ia);
     }
 
-    ROI qreg    = halo_region(pil, frame, filter_halo(base));
-    qreg.chbegin = 0;
-    qreg.chend   = nch;
-    base.diagnostics = nullptr;
-    std::vector<float> d0(np, 1.0f);         // candidate 0's hat diagonal
-    std::vector<float> pilot_var(np, 0.0f);  // variance of its luminance
-    // With halves: both candidates on each half alone, whose cross errors
-    // rank them (halves_risk()) with no noise estimate and no D.
-    const bool halves = guides.half_a && guides.half_b;
+    // What the risks need: with halves, every candidate on each half alone
+    // (their cross errors rank them with no noise estimate and no D);
+    // without, candidate 0's hat diagonal. Either gives the variance of
+    // candidate 0's luminance, the pilot's.
+    std::vector<float> d0(np, 1.0f), pilot_var(np);
     ImageBuf half_z[2], half_out0[2];
-    std::vector<ImageBuf> half_out1[2] = { std::vector<ImageBuf>(nf),
-                                           std::vector<ImageBuf>(nf) };
+    std::vector<ImageBuf> half_out1[2];
     if (halves) {
-        Guides own   = guides;  // each half estimates its own noise
-        own.half_a   = own.half_b = nullptr;
-        own.variance = nullptr;
-        const ImageBuf* half[2] = { guides.half_a, guides.half_b };
-        std::vector<float> lum[2];
-        for (int k = 0; k < 2; ++k) {
-            if (!demodulate(half_z[k], *half[k], albedo, options.albedo_eps, qreg,
-                            nthreads))
-                return fail(half_z[k]);
-            base.progress = progress(0.3f + 0.25f * float(k), 0.55f + 0.25f * float(k));
-            if (!regression_filter(half_out0[k], half_z[k], albedo, own, base,
-                                   nullptr, pil, nthreads))
-                return fail(half_out0[k]);
-            const std::vector<float> o = read_channels(half_out0[k], pil, 0, 3);
-            lum[k].resize(np);
-            for (size_t i = 0; i < np; ++i)
-                lum[k][i] = luminance(&o[3 * i]);
-        }
-        // The two filtered halves differ by their noise (and little bias):
-        // E (F(A) - F(B))^2 = 2 Var F(half) ~ 4 Var F(A + B) / 2.
-        std::vector<float> dif2(np, 0.0f);
+        std::vector<float> dif2;
+        if (!filter_halves(dst, albedo, guides, base, progress, fos, sel, pil, qreg,
+                           s, half_z, half_out0, half_out1, dif2, nthreads))
+            return false;
+        // E (F(A) - F(B))^2 = 2 Var F(half) ~ 4 Var F((A + B) / 2).
         for (size_t i = 0; i < np; ++i)
-            if (s[i] > 0.0f) {
-                dif2[i]      = (lum[0][i] - lum[1][i]) * (lum[0][i] - lum[1][i]);
-                pilot_var[i] = 0.25f * dif2[i];
-            }
-        for (int k = 0; k < 2; ++k) {
-            const std::vector<float> o = read_channels(half_out0[k], pil, 0, 3);
-            const std::vector<float> z = read_channels(half_z[k], pil, 0, 3);
-            std::vector<float> pv(4 * np), fz(3 * np, NAN);
-            for (size_t i = 0; i < np; ++i) {
-                for (int c = 0; c < 3; ++c) {
-                    pv[4 * i + c] = o[3 * i + c];
-                    if (s[i] > 0.0f)
-                        fz[3 * i + c] = z[3 * i + c];
-                }
-                pv[4 * i + 3] = 0.5f * dif2[i];
-            }
-            ImageBuf pilot_k = float_image(pil, frame, 4), fitted_k = float_image(pil, frame, 3);
-            store(pilot_k, pil, pv);
-            store(fitted_k, pil, fz);
-            for (size_t f = 0; f < nf; ++f)
-                if (!feature_regression(half_out1[k][f], fitted_k, albedo, pilot_k,
-                                        own, fos[f], sel, nthreads))
-                    return fail(half_out1[k][f]);
-        }
+            pilot_var[i] = 0.25f * dif2[i];
     } else {
-        // Without: candidate 0's hat diagonal by Monte-Carlo SURE (Ramani,
-        // Blu & Unser 2008): the quotient nudged by +-kNudge times the
-        // local light level (the 7x7 mean of |z_l|, a function of the
-        // frame's pixels only, so that every strip nudges a pixel alike)
-        // over everything the nudged run reads.
-        std::vector<float> q = read_channels(quotient, qreg, 0, nch);
-        std::vector<float> scale(qreg.npixels(), 0.0f);
-        {
-            const ROI lreg = halo_region(qreg, frame, kScaleRadius);
-            const std::vector<float> zq = read_channels(quotient, lreg, 0, 3);
-            for (int y = qreg.ybegin; y < qreg.yend; ++y)
-                for (int x = qreg.xbegin; x < qreg.xend; ++x) {
-                    double sum = 0.0;
-                    int n      = 0;
-                    for (int v = std::max(y - kScaleRadius, lreg.ybegin);
-                         v < std::min(y + kScaleRadius + 1, lreg.yend); ++v)
-                        for (int u = std::max(x - kScaleRadius, lreg.xbegin);
-                             u < std::min(x + kScaleRadius + 1, lreg.xend); ++u) {
-                            const float l = luminance(
-                                &zq[3 * (size_t(v - lreg.ybegin) * size_t(lreg.width())
-                                         + size_t(u - lreg.xbegin))]);
-                            if (std::isfinite(l))
-                                sum += std::fabs(l), ++n;
-                        }
-                    const size_t j = size_t(y - qreg.ybegin) * size_t(qreg.width())
-                                     + size_t(x - qreg.xbegin);
-                    scale[j] = n ? float(kNudge * sum / n) : 0.0f;
-                    const float d = nudge_sign(x - frame.xbegin, y - frame.ybegin) * scale[j];
-                    for (int c = 0; c < 3; ++c)
-                        q[size_t(nch) * j + size_t(c)] += d;
-                }
-        }
-        ImageSpec qspec = quotient.spec();
-        qspec.x = qreg.xbegin, qspec.y = qreg.ybegin;
-        qspec.width = qreg.width(), qspec.height = qreg.height();
-        qspec.set_format(TypeFloat);
-        ImageBuf nudged(qspec);
-        nudged.set_pixels(qreg, TypeFloat, q.data());
-        q = {};
         base.progress = progress(0.4f, 0.8f);
-        if (!regression_filter(nudged_out0, nudged, albedo, guides, base, nullptr,
-                               pil, nthreads))
-            return fail(nudged_out0);
-        const std::vector<float> o0n = read_channels(nudged_out0, pil, 0, 3);
-        for (size_t i = 0; i < np; ++i) {
-            const int x = pil.xbegin + int(i % size_t(pil.width()));
-            const int y = pil.ybegin + int(i / size_t(pil.width()));
-            const float nudge = scale[size_t(y - qreg.ybegin) * size_t(qreg.width())
-                                      + size_t(x - qreg.xbegin)];
-            if (s[i] > 0.0f && nudge > 0.0f)
-                d0[i] = nudge_sign(x - frame.xbegin, y - frame.ybegin)
-                        * (luminance(&o0n[3 * i]) - luminance(&o0[3 * i])) / nudge;
-            // The pilot's variance sum_j H_qj^2 sigma_j^2 ~ D sigma^2.
+        if (!monte_carlo_hat_diagonal(dst, quotient, albedo, guides, base, pil,
+                                      qreg, o0, s, d0, nthreads))
+            return false;
+        // sum_j H_qj^2 sigma_j^2 ~ D sigma^2.
+        for (size_t i = 0; i < np; ++i)
             pilot_var[i] = s[i] * s[i] * std::min(std::max(d0[i], 0.0f), 1.0f);
-        }
     }
     ImageBuf pilot = float_image(pil, frame, 4);
     {
@@ -380,7 +433,8 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         store(pilot, pil, pv);
     }
 
-    // Candidate 1, and the outliers' light.
+    // The feature regressions, bounded by the radiance around each pixel,
+    // and the outliers' light.
     std::vector<ImageBuf> out1(nf);
     ImageBuf fitted = float_image(pil, frame, 3);
     store(fitted, pil, zfit);
@@ -403,7 +457,8 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     }
 
     // Risks over the selection's support: variance (0 at outliers and non
-    // fit points: no observation), relative-MSE weight.
+    // fit points: no observation), relative-MSE weight (NaN without an
+    // observation, for the halves' risk, which reads no variance).
     const size_t ns = sel.npixels();
     ImageBuf cand0 = float_image(sel, frame, 4), var = float_image(sel, frame, 1),
              weight = float_image(sel, frame, 1);
@@ -428,7 +483,9 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                 // in z: radiance = z (a + albedo_eps).
                 const double al = std::max(luminance(&a[3 * k]), 0.0f)
                                   + options.albedo_eps;
-                w[k] = float(al * al / (o_l * o_l * al * al + 0.01));
+                w[k] = halves && !(v[k] > 0.0f)
+                           ? NAN
+                           : float(al * al / (o_l * o_l * al * al + 0.01));
             }
         store(cand0, sel, c0);
         store(var, sel, v);
@@ -437,13 +494,6 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     ImageBuf risk0, chosen;
     std::vector<ImageBuf> risk1(nf);
     if (halves) {
-        // No observation: a NaN weight leaves the pixel out of the averages.
-        std::vector<float> w = read_channels(weight, sel, 0, 1);
-        const std::vector<float> v = read_channels(var, sel, 0, 1);
-        for (size_t k = 0; k < ns; ++k)
-            if (!(v[k] > 0.0f))
-                w[k] = NAN;
-        store(weight, sel, w);
         if (!halves_risk(risk0, half_out0[0], half_out0[1], half_z[0], half_z[1],
                          weight, sel, nthreads))
             return fail(risk0);
