@@ -264,6 +264,7 @@ layered_denoise(ImageBuf& dst, const std::vector<Layer>& layers,
         layer_opt.diagnostics   = options.diagnostics && layer.filter
                                       ? &layer_maps
                                       : nullptr;
+        layer_opt.hat_diagonal  = nullptr;  // one per layer: not combined
         if (!denoise_layer(dst, layer, guides, layer_opt, &layer_stats, roi,
                            nthreads, out, contribution))
             return false;

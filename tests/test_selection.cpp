@@ -226,6 +226,72 @@ TEST(FeatureRegression, HatDiagonalIsTheOutputsDerivative)
     EXPECT_GE(close, checked * 9 / 10) << close << " of " << checked;
 }
 
+// Today's filter's hat diagonal (FilterOptions::hat_diagonal, SURE's D for
+// candidate 0) is the derivative of a pixel's output luminance by its own
+// quotient: a small nudge of one pixel (of its three channels alike) moves
+// its output by D times the nudge, except where the nudge moves a window's
+// stop or a clamp. Without the value term the weights do not read z, so
+// nearly every pixel agrees closely; with it (the default) D carries its
+// first-order term, and the agreement is looser.
+TEST(RegressionFilter, HatDiagonalIsTheOutputsDerivative)
+{
+    const synth::Scene s = synth::staircase(40, 36, 6, { 16, 21 });
+    zdenoise::Guides g;
+    g.normal = &s.normal, g.depth = &s.depth, g.object_id = &s.object_id;
+    const ImageBuf z = zdenoise::demodulate(s.noisy, s.albedo);
+    for (float value_k : { 0.0f, 1.0f }) {
+        SCOPED_TRACE(value_k ? "value term" : "no value term");
+        zdenoise::FilterOptions opt;
+        opt.r_max   = 6;
+        opt.value_k = value_k;
+        ImageBuf hat;
+        opt.hat_diagonal = &hat;
+        const ImageBuf base = zdenoise::regression_filter(z, s.albedo, g, opt);
+        ASSERT_FALSE(base.has_error()) << base.geterror();
+        ASSERT_EQ(hat.nchannels(), 1);
+        opt.hat_diagonal = nullptr;
+        const RefImage b = zdenoise_ref::from_imagebuf(base);
+        int checked = 0, close = 0;
+        std::vector<double> gap;  // d - fd
+        for (int y = 3; y < s.h - 3; y += 4)
+            for (int x = 3; x < s.w - 3; x += 4) {
+                ImageBuf moved_z;
+                moved_z.copy(z);
+                float px[3];
+                moved_z.getpixel(x, y, px, 3);
+                const float eps = 1e-3f * std::fabs(kLuma[0] * px[0] + kLuma[1] * px[1]
+                                                    + kLuma[2] * px[2]);
+                for (float& v : px)
+                    v += eps;
+                moved_z.setpixel(x, y, px, 3);
+                const RefImage m = zdenoise_ref::from_imagebuf(
+                    zdenoise::regression_filter(moved_z, s.albedo, g, opt));
+                const double fd = (double(luma(m, x, y)) - luma(b, x, y)) / eps;
+                const double d  = hat.getchannel(x, y, 0, 0);
+                ++checked;
+                close += std::fabs(fd - d) < (value_k ? 0.05 : 0.01);
+                gap.push_back(d - fd);
+            }
+        EXPECT_GE(close, checked * 9 / 10) << close << " of " << checked;
+        // No bias either way (a stop moved by the nudge is an outlier of fd).
+        std::nth_element(gap.begin(), gap.begin() + gap.size() / 2, gap.end());
+        EXPECT_LT(std::fabs(gap[gap.size() / 2]), value_k ? 0.01 : 0.002);
+    }
+}
+
+// The hat diagonal is the selection's own business when select is on.
+TEST(RegressionFilter, HatDiagonalIsRefusedWithSelect)
+{
+    const synth::Scene s = synth::shadow_edge(16, 16);
+    zdenoise::FilterOptions opt;
+    opt.select = 1;
+    ImageBuf hat, out;
+    opt.hat_diagonal = &hat;
+    const ImageBuf z = zdenoise::demodulate(s.noisy, s.albedo);
+    EXPECT_FALSE(zdenoise::regression_filter(out, z, s.albedo, {}, opt));
+    EXPECT_NE(out.geterror().find("hat_diagonal"), std::string::npos) << out.geterror();
+}
+
 // The library splits the frame into parts and threads exactly.
 TEST(FeatureRegression, PartsAndThreadsGiveTheWholeImage)
 {

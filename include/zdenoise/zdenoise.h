@@ -109,8 +109,8 @@ struct FilterOptions {
     /// estimate, or the halves' cross error when half_a and half_b are
     /// given), today's filter or one of two feature regressions
     /// (docs/FILTER.md section 13, include/zdenoise/selection.h); 0 =
-    /// today's filter alone, the default while selection costs about 3x
-    /// the time (docs/SELECTION.md section 9).
+    /// today's filter alone, the default while selection costs about 2.5x
+    /// the time (docs/SELECTION.md section 10).
     int select = 0;
 
     /// Optional progress report with the fraction done in [0,1], called from
@@ -139,6 +139,17 @@ struct FilterOptions {
     /// layers, weighted by their light). Not a filter parameter: it never
     /// changes the result.
     ImageBuf* diagnostics = nullptr;
+
+    /// If not null, receives the filter's hat diagonal D = d out_l / d z_l
+    /// over the output pixels (one float channel, allocated here when
+    /// uninitialised, else written in place): how much each pixel's
+    /// filtered light luminance follows its own quotient luminance, every
+    /// weight held fixed but the value term's (docs/FILTER.md 13.3). Stein's
+    /// unbiased risk estimate of the filter's error needs it; 1 where the
+    /// pixel is passed through. Not with `select` (the selection computes
+    /// its own); layered_denoise() ignores it. Not a filter parameter: it
+    /// never changes the result.
+    ImageBuf* hat_diagonal = nullptr;
 
     /// The method's own defaults (docs/FILTER.md section 9: edge_k 3, value_k 2,
     /// sigma_good 1, radius_growth 1, every fit point a centre), before

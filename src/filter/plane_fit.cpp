@@ -5,6 +5,8 @@
 
 #include "plane_fit.h"
 
+#include <algorithm>
+
 namespace zdenoise {
 namespace detail {
 
@@ -27,7 +29,8 @@ solve(const FitMoments& m)
     if (m.count < 3 || !(det > 1e-6 * s[0] * s[0] * s[0])) {
         for (int ch = 0; ch < 3; ++ch)
             p.c[ch] = m.t[ch][0] / s[0];
-        p.var0 = m.n[0] / (s[0] * s[0]);
+        p.var0   = m.n[0] / (s[0] * s[0]);
+        p.hat[0] = 1.0 / s[0];
         return p;
     }
     const double inv[3][3] = { { c00 / det, c01 / det, c02 / det },
@@ -39,6 +42,9 @@ solve(const FitMoments& m)
         p.a[ch] = inv[1][0] * t[0] + inv[1][1] * t[1] + inv[1][2] * t[2];
         p.b[ch] = inv[2][0] * t[0] + inv[2][1] * t[1] + inv[2][2] * t[2];
     }
+    const double hat[6] = { inv[0][0], 2.0 * inv[0][1], 2.0 * inv[0][2],
+                            inv[1][1], 2.0 * inv[1][2], inv[2][2] };
+    std::copy(hat, hat + 6, p.hat);
     // Sandwich variance of the value at p0: r^T N r with r = M^-1 e0.
     const double r[3] = { inv[0][0], inv[1][0], inv[2][0] };
     const double* n   = m.n;

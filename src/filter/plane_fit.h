@@ -70,6 +70,11 @@ struct Plane {
     bool present = false;
     double c[3] = {}, a[3] = {}, b[3] = {};
     double var0 = 0.0;  ///< predicted variance of the luminance at p0
+    /// The quadratic form e^T M^-1 e, e = (1, u, v): a fit point's own
+    /// weight times it is the fit's derivative in the point's value
+    /// (docs/SELECTION.md 2.2), {m00, 2 m01, 2 m02, m11, 2 m12, m22};
+    /// {1 / s0, 0, ...} for a constant.
+    double hat[6] = {};
 
     double at(int ch, double u, double v) const
     {

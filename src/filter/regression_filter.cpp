@@ -92,11 +92,14 @@ struct Splats {
     std::vector<double> spread;  ///< outliers' spread light, z (section 3a)
     /// kDiagnosticSums a pixel when diagnostics are asked for, else empty.
     std::vector<double> diagnostics;
-    Splats(size_t npix, bool with_diagnostics)
+    /// kHatSums a pixel when the hat diagonal is asked for, else empty.
+    std::vector<double> hat;
+    Splats(size_t npix, bool with_diagnostics, bool with_hat)
         : acc(3 * npix, 0.0)
         , wsum(npix, 0.0)
         , spread(3 * npix, 0.0)
         , diagnostics(with_diagnostics ? kDiagnosticSums * npix : 0, 0.0)
+        , hat(with_hat ? kHatSums * npix : 0, 0.0)
     {
     }
 };
@@ -116,7 +119,8 @@ fit_centres(const FilterInputs& in, const FilterOptions& opt, const ROI& roi,
     std::mutex progress_mutex;
     auto run_block = [&](int b) {
         WindowFitter fitter(in, opt, roi, splats.acc, splats.wsum,
-                            opt.diagnostics ? &splats.diagnostics : nullptr);
+                            opt.diagnostics ? &splats.diagnostics : nullptr,
+                            splats.hat.empty() ? nullptr : &splats.hat);
         fit_block(blocks, b, in, opt, roi, fitter, block_stats[size_t(b)]);
         const int64_t done = ++blocks_done;
         if (opt.progress) {
@@ -238,13 +242,36 @@ write_diagnostics(ImageBuf& dst, const FilterInputs& in, const Splats& splats,
     return dst.set_pixels(maps_roi, TypeFloat, maps.data());
 }
 
+/// The hat diagonal D = d out_l / d z_l over `roi` (docs/SELECTION.md 2.5,
+/// 2.6) from the splats' sums, 1 where nothing was splatted.
+bool
+write_hat_diagonal(ImageBuf& dst, const Splats& splats, ROI roi, int nthreads)
+{
+    const size_t npix = size_t(roi.width()) * size_t(roi.height());
+    std::vector<float> d(npix, 1.0f);
+    parallel_for(int64_t(0), int64_t(npix), [&](int64_t o) {
+        const double w = splats.wsum[size_t(o)];
+        if (!(w > 0.0))
+            return;
+        const double* a = &splats.acc[3 * size_t(o)];
+        const double out_l = (double(kLumaWeights[0]) * a[0]
+                              + double(kLumaWeights[1]) * a[1]
+                              + double(kLumaWeights[2]) * a[2]) / w;
+        const double* h = &splats.hat[kHatSums * size_t(o)];
+        d[size_t(o)] = float((h[kHatOwn] - h[kHatValueA] + out_l * h[kHatValue]) / w);
+    }, paropt(nthreads));
+    roi.chbegin = 0;
+    roi.chend   = 1;
+    return dst.set_pixels(roi, TypeFloat, d.data());
+}
+
 /// Filter the output pixels `roi` (sections 2-7), reading the inputs over
 /// roi plus the halo everything depends on. `opt.frame` is the image's data
-/// window.
+/// window. `hat`, if not null, receives the hat diagonal.
 bool
 filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
             const Guides& guides, const FilterOptions& opt, ROI roi,
-            int nthreads, FilterStats& totals)
+            int nthreads, FilterStats& totals, ImageBuf* hat)
 {
     const ROI region = halo_region(roi, opt.frame, filter_halo(opt));
     FilterInputs in;
@@ -252,7 +279,7 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
                               nthreads))
         return false;
     Splats splats(size_t(roi.width()) * size_t(roi.height()),
-                  opt.diagnostics != nullptr);
+                  opt.diagnostics != nullptr, hat != nullptr);
     FilterStats tile = fit_centres(in, opt, roi, nthreads, splats);
     spread_outliers(in, opt, roi, splats.spread, nthreads);
     if (!normalise_output(dst, quotient, in, opt, splats, roi, nthreads, tile))
@@ -261,6 +288,11 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
         && !write_diagnostics(*opt.diagnostics, in, splats, roi, nthreads)) {
         dst.errorfmt("regression_filter: could not store the diagnostics: {}",
                      opt.diagnostics->geterror());
+        return false;
+    }
+    if (hat && !write_hat_diagonal(*hat, splats, roi, nthreads)) {
+        dst.errorfmt("regression_filter: could not store the hat diagonal: {}",
+                     hat->geterror());
         return false;
     }
     totals.merge(tile);
@@ -323,6 +355,17 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         && !detail::prepare_diagnostics(dst, *options.diagnostics, roi,
                                         tile_opt.frame, opname))
         return false;
+    ImageBuf* hat = options.hat_diagonal;
+    if (hat && options.select) {
+        dst.errorfmt("{}: option hat_diagonal is invalid with select 1: the "
+                     "selection's output has no hat diagonal of its own",
+                     opname);
+        return false;
+    }
+    if (hat
+        && !detail::prepare_result(dst, *hat, roi, tile_opt.frame, 1, opname,
+                                    "hat diagonal"))
+        return false;
     if (options.select)
         return detail::selected_regression_filter(dst, quotient, albedo, guides,
                                                   tile_opt, stats, roi, nthreads);
@@ -345,7 +388,7 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                 options.progress((float(t) + f) / float(ntiles));
             };
         if (!filter_tile(dst, quotient, albedo, guides, tile_opt, tile,
-                         nthreads, totals))
+                         nthreads, totals, hat))
             return false;
     }
     if (stats)

@@ -6,6 +6,8 @@
 
 #include "row_kernels.h"
 
+#include "internal.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -123,13 +125,14 @@ namespace {
         const float *__restrict spat, const float *__restrict zl,              \
         const float *__restrict ia0, const float *__restrict ia1,              \
         const float *__restrict ia2, float *__restrict out_s,                  \
-        float *__restrict a0, float *__restrict a1, float *__restrict a2
+        float *__restrict a0, float *__restrict a1, float *__restrict a2,      \
+        float *__restrict h, float *__restrict hc, float *__restrict hca
 #define ZDENOISE_SPLAT_ARGS(in)                                                \
     in.cls, in.g, in.fit_weight, in.values, in.spatial, in.zl,                 \
         in.inv_albedo[0], in.inv_albedo[1], in.inv_albedo[2], in.s, in.a[0],   \
-        in.a[1], in.a[2]
+        in.a[1], in.a[2], in.hat[0], in.hat[1], in.hat[2]
 
-template<bool kPower8>
+template<bool kPower8, bool kHat>
 [[gnu::always_inline]] inline void
 splat_lanes(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
 {
@@ -160,6 +163,18 @@ splat_lanes(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
             const float value = fit ? (fw > 0.0f ? kept : fresh) : 1.0f;
             const float s = use ? g * sp * ey * value : 0.0f;
             const float u = (dx0 + float(q)) * inv_r;
+            // The hat diagonal's terms: the point's own fit weight times
+            // e^T M^-1 e of the whole and the quadrant plane.
+            float h_whole = 0.0f, h_quadrant = 0.0f, H_l = 0.0f, A_l = 0.0f;
+            if (kHat) {
+                const float w = use ? fw * sp * ey * value : 0.0f;
+                auto form = [u, v](const float* k) {
+                    return k[0] + u * (k[1] + k[3] * u + k[4] * v)
+                           + v * (k[2] + k[5] * v);
+                };
+                h_whole    = w * form(P.hat);
+                h_quadrant = w * form(Q.hat);
+            }
 #pragma GCC unroll 3
             for (int ch = 0; ch < 3; ++ch) {
                 const float Z  = P.c[ch] + P.a[ch] * u + P.b[ch] * v;
@@ -189,25 +204,71 @@ splat_lanes(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
                 const float Al = std::min(std::max(A, range.llo[ch] * ia),
                                           range.lhi[ch] * ia);
                 out_a[ch][q] = s * Al;
+                if (kHat) {
+                    // The blend's weight follows the point too: w_m = r^p
+                    // with ln r = |ln a - ln b|, so dw_m = p w_m d ln r
+                    // (none where w_m is at its bound), and
+                    // dA = (h + w_m h_m + (Zm - Z) dw_m / (1 + w_m)) / (1 + w_m).
+                    // A clamped channel does not follow its own value.
+                    const float da  = (Z < 0.0f ? -h_whole : h_whole) / a;
+                    const float db  = (Zm < 0.0f ? -h_quadrant : h_quadrant) / b;
+                    const float dln = a >= b ? da - db : db - da;
+                    const float dwm = wm < float(kMaxWm)
+                                          ? (kPower8 ? 8.0f : power) * wm * dln
+                                          : 0.0f;
+                    const float H = (h_whole + wm * h_quadrant
+                                     + (Zm - Z) * dwm / (1.0f + wm))
+                                    / (1.0f + wm);
+                    H_l += kLumaWeights[ch] * (Al == A ? H : 0.0f);
+                    A_l += kLumaWeights[ch] * Al;
+                }
             }
             out_s[q] = s;
+            if (kHat) {
+                // d ln(weight) / d zl of a fit point's value term (where
+                // exp_neg does not clamp it).
+                const float t = value_scale * std::fabs(zl[q] - mean);
+                const float c = fit && t < kValueClamp
+                                    ? (zl[q] > mean   ? value_scale
+                                       : zl[q] < mean ? -value_scale
+                                                      : 0.0f)
+                                    : 0.0f;
+                h[q]   = s * H_l * (1.0f - c * (zl[q] - A_l));
+                hc[q]  = s * c;
+                hca[q] = s * c * A_l;
+            }
         }
     }
 }
 
+#define ZDENOISE_SPLAT_NAMES                                                   \
+    cls, gw, fitw, values, spat, zl, ia0, ia1, ia2, out_s, a0, a1, a2, h, hc, hca
+
 ZDENOISE_ROW_KERNEL void
 splat_row_power8(ZDENOISE_SPLAT_POINTERS, const SplatRow& in)
 {
-    splat_lanes<true>(cls, gw, fitw, values, spat, zl, ia0, ia1, ia2, out_s, a0,
-                      a1, a2, in, 8.0f);
+    splat_lanes<true, false>(ZDENOISE_SPLAT_NAMES, in, 8.0f);
 }
 
 void
 splat_row(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
 {
-    splat_lanes<false>(cls, gw, fitw, values, spat, zl, ia0, ia1, ia2, out_s,
-                       a0, a1, a2, in, power);
+    splat_lanes<false, false>(ZDENOISE_SPLAT_NAMES, in, power);
 }
+
+// With the hat diagonal (selection's risk only): not the default's cost.
+ZDENOISE_ROW_KERNEL void
+splat_row_power8_hat(ZDENOISE_SPLAT_POINTERS, const SplatRow& in)
+{
+    splat_lanes<true, true>(ZDENOISE_SPLAT_NAMES, in, 8.0f);
+}
+
+void
+splat_row_hat(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
+{
+    splat_lanes<false, true>(ZDENOISE_SPLAT_NAMES, in, power);
+}
+#undef ZDENOISE_SPLAT_NAMES
 
 }  // namespace
 
@@ -235,7 +296,12 @@ WindowRange::WindowRange(const RangeLanes& r)
 void
 splat_row(const SplatRow& in, float power)
 {
-    if (power == 8.0f)
+    if (in.hat[0]) {
+        if (power == 8.0f)
+            splat_row_power8_hat(ZDENOISE_SPLAT_ARGS(in), in);
+        else
+            splat_row_hat(ZDENOISE_SPLAT_ARGS(in), in, power);
+    } else if (power == 8.0f)
         splat_row_power8(ZDENOISE_SPLAT_ARGS(in), in);
     else
         splat_row(ZDENOISE_SPLAT_ARGS(in), in, power);

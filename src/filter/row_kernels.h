@@ -80,6 +80,7 @@ fit_row(const float* __restrict fit_weight, const float* __restrict spatial,
 /// A solved plane's coefficients as floats, for the splat kernel.
 struct PlaneCoeffs {
     float c[3] = {}, a[3] = {}, b[3] = {};
+    float hat[6] = {};  ///< Plane::hat
 };
 
 /// One row segment of a window's splat, all of it in one quadrant:
@@ -99,6 +100,11 @@ struct SplatRow {
     WindowRange range;           ///< A is clamped to it
     float* s;     ///< receives each point's weight (0: receives nothing)
     float* a[3];  ///< receives weight times the blended plane value A
+    /// Null, or receive the terms of the hat diagonal (docs/SELECTION.md
+    /// 2.5, 2.6): s H_l (1 - c (zl - A_l)), s c and s c A_l, with H_l the
+    /// luminance of the blended fits' derivatives in the point's own value
+    /// and c the value term's derivative.
+    float* hat[3] = { nullptr, nullptr, nullptr };
 };
 
 

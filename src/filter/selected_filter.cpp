@@ -4,11 +4,14 @@
 // regression_filter() with FilterOptions::select = 1 (docs/FILTER.md
 // section 13): today's filter and two feature regressions, and the
 // per-pixel choice among them by their estimated error. Stages, in order:
-//   regression_filter()    candidate 0, today's filter, and its maps
+//   regression_filter()    candidate 0, today's filter, its maps and its
+//                          hat diagonal D
 //   decode_filter_inputs() what the feature regressions fit (outliers
 //                          capped), the outliers' spread light, and
 //                          radiance_bounds() of their output
-//   monte_carlo_hat_diagonal()  without halves: candidate 0's D
+//   residual_bounded_variance()  without halves: the noise for SURE and
+//                          the pilot, at most what candidate 0's residuals
+//                          allow
 //   filter_halves()        with halves: every candidate on each half alone
 //   feature_regression()   candidates 1 and 2, candidate 0 as their pilot
 //   sure_risk() or halves_risk()  each candidate's risk, relative-MSE
@@ -37,12 +40,6 @@ using namespace OIIO;
 
 namespace {
 
-/// Size of the nudge of Monte-Carlo SURE, relative to the local light
-/// level: smooth from pixel to pixel (a nudge scaled by the noisy per-pixel
-/// sigma makes the neighbours' cross terms explode where sigma dips), small
-/// enough that the filter's stops rarely move, large enough for floats.
-constexpr float kNudge = 0.02f;
-
 /// The confidence rule of the choice with halves: their cross errors rank
 /// the candidates run on one half, at half the samples, and that ranking
 /// carries over to the candidates run on (A + B) / 2 only where it is
@@ -51,8 +48,23 @@ constexpr float kNudge = 0.02f;
 /// SURE ranks the candidates of the output itself: 0, the default.
 constexpr float kHalvesConfidence = 1.0f;
 
-/// Half-size of the box whose mean |z_l| is the local light level.
-constexpr int kScaleRadius = 3;
+/// Half-size of the box over which candidate 0's residuals bound the noise
+/// (residual_bounded_variance()): 49 residuals, a bound within about 20 %.
+constexpr int kVarianceRadius = 3;
+
+/// The bound holds where the filter's noise estimate exceeds it by more
+/// than this factor: a mean of 49 squared residuals has a relative standard
+/// error of 0.2 for Gaussian noise and several times that for MC's heavy
+/// tails, and the minimum of two noisy estimates is biased low (measured:
+/// a synthetic saw-tooth 20 % worse than today's filter with 1, 3.5 % with
+/// 2; the public set's cornell_textured lamp, where the estimate is 5-10x
+/// the truth, is held alike by both).
+constexpr float kBoundMargin = 2.0f;
+
+/// The residuals pooled into one pixel's bound are those of pixels whose
+/// candidate-0 light is within this factor of its own: MC variance follows
+/// the light, so pixels of similar light have similar noise.
+constexpr float kLightRatio = 2.0f;
 
 /// How far the noise estimate of a pixel looks (filter_halo()'s 6).
 constexpr int kNoiseFootprint = 6;
@@ -60,18 +72,6 @@ constexpr int kNoiseFootprint = 6;
 /// Outliers are left out of the risk averages (of every candidate alike):
 /// a firefly's own squared error would decide its whole neighbourhood.
 constexpr float kOutlierSigmas = 4.0f;
-
-/// +1 or -1, a hash of the pixel's position in the frame (relative to its
-/// origin): the same for any strip and any data window origin.
-float
-nudge_sign(int x, int y)
-{
-    uint32_t h = uint32_t(x) * 0x9E3779B1u ^ (uint32_t(y) * 0x85EBCA77u);
-    h ^= h >> 15;
-    h *= 0x2C1B3C6Du;
-    h ^= h >> 12;
-    return (h & 1u) ? 1.0f : -1.0f;
-}
 
 /// Store `v` (all of img's channels a pixel) over the pixels of r.
 void
@@ -167,71 +167,65 @@ feature_candidates_halo()
     return halo;
 }
 
-/// Candidate 0's hat diagonal over `pil` by Monte-Carlo SURE (Ramani, Blu &
-/// Unser 2008): `base` run once more on the quotient nudged by +-kNudge
-/// times the local light level (the 7x7 mean of |z_l|, a function of the
-/// frame's pixels only, so that every strip nudges a pixel alike) over
-/// `qreg`, everything that run reads. `o0` is candidate 0's RGB over pil;
-/// d0 keeps 1 where `s` (the noise) is 0: no observation.
-bool
-monte_carlo_hat_diagonal(ImageBuf& dst, const ImageBuf& quotient,
-                         const ImageBuf& albedo, const Guides& guides,
-                         const FilterOptions& base, const ROI& pil,
-                         const ROI& qreg, const std::vector<float>& o0,
-                         const std::vector<float>& s, std::vector<float>& d0,
-                         int nthreads)
+/// The noise variance of z_l for SURE and for the pilot over `pil`
+/// (FILTER.md 13.3): the filter's estimate `s`^2, but at most what candidate
+/// 0's residuals allow. For a smoother with hat diagonal D < 1/2,
+/// E (z_l - out_l)^2 = sigma^2 (1 - 2 D) + MSE >= sigma^2 (1 - 2 D), so the
+/// mean of (z_l - out_l)^2 / (1 - 2 D) over a box bounds sigma^2 from above.
+/// The box pools the fit points (not outliers) whose light out_l is within
+/// kLightRatio of the pixel's; the bound applies with kBoundMargin. The
+/// filter's estimate leaks across a step of the light (its 3x3 residual
+/// sees the step) and can exceed the truth there many times, which makes
+/// SURE prefer any smoother filter and the pilot's patch weights accept
+/// the step: the bound holds both. `out_l` and `d0` cover `k0reg` (pil and
+/// the box), and so does `in`. Returns 0 where `s` is 0 (no observation).
+std::vector<float>
+residual_bounded_variance(const FilterInputs& in, const ROI& pil,
+                          const ROI& k0reg, const std::vector<float>& out_l,
+                          const std::vector<float>& d0,
+                          const std::vector<float>& s)
 {
-    const ROI& frame = base.frame;
-    const int nch    = quotient.nchannels();
-    std::vector<float> q = read_channels(quotient, qreg, 0, nch);
-    std::vector<float> scale(qreg.npixels(), 0.0f);
-    const ROI lreg = halo_region(qreg, frame, kScaleRadius);
-    const std::vector<float> zq = read_channels(quotient, lreg, 0, 3);
-    for (int y = qreg.ybegin; y < qreg.yend; ++y)
-        for (int x = qreg.xbegin; x < qreg.xend; ++x) {
+    const int kw = k0reg.width();
+    auto at      = [&](int x, int y) {
+        return size_t(y - k0reg.ybegin) * size_t(kw) + size_t(x - k0reg.xbegin);
+    };
+    // Each pixel's term (z_l - out_l)^2 / (1 - 2 D), NaN where it has none.
+    std::vector<float> term(k0reg.npixels(), NAN);
+    for (int y = k0reg.ybegin; y < k0reg.yend; ++y)
+        for (int x = k0reg.xbegin; x < k0reg.xend; ++x) {
+            const size_t i = in.index(x, y), k = at(x, y);
+            if (!(in.cls[i] & kFitPoint) || !(d0[k] < 0.5f))
+                continue;
+            const float sd = std::sqrt(std::max(in.vs[i], 0.0f));
+            const float r  = in.zl[i] - out_l[k];
+            if (std::fabs(r) <= kOutlierSigmas * sd)
+                term[k] = r * r / (1.0f - 2.0f * std::max(d0[k], 0.0f));
+        }
+    std::vector<float> sigma2(pil.npixels(), 0.0f);
+    for (int y = pil.ybegin; y < pil.yend; ++y)
+        for (int x = pil.xbegin; x < pil.xend; ++x) {
+            const size_t j = size_t(y - pil.ybegin) * size_t(pil.width())
+                             + size_t(x - pil.xbegin);
+            if (!(s[j] > 0.0f))
+                continue;
+            const float light = out_l[at(x, y)];
             double sum = 0.0;
             int n      = 0;
-            for (int v = std::max(y - kScaleRadius, lreg.ybegin);
-                 v < std::min(y + kScaleRadius + 1, lreg.yend); ++v)
-                for (int u = std::max(x - kScaleRadius, lreg.xbegin);
-                     u < std::min(x + kScaleRadius + 1, lreg.xend); ++u) {
-                    const float l = luminance(
-                        &zq[3 * (size_t(v - lreg.ybegin) * size_t(lreg.width())
-                                 + size_t(u - lreg.xbegin))]);
-                    if (std::isfinite(l))
-                        sum += std::fabs(l), ++n;
+            for (int v = y - kVarianceRadius; v <= y + kVarianceRadius; ++v)
+                for (int u = x - kVarianceRadius; u <= x + kVarianceRadius; ++u) {
+                    if (!k0reg.contains(u, v))
+                        continue;  // beyond the frame
+                    const size_t k  = at(u, v);
+                    const float lk  = out_l[k];
+                    if (std::isfinite(term[k]) && lk <= kLightRatio * light
+                        && light <= kLightRatio * lk)
+                        sum += term[k], ++n;
                 }
-            const size_t j = size_t(y - qreg.ybegin) * size_t(qreg.width())
-                             + size_t(x - qreg.xbegin);
-            scale[j] = n ? float(kNudge * sum / n) : 0.0f;
-            const float d = nudge_sign(x - frame.xbegin, y - frame.ybegin) * scale[j];
-            for (int c = 0; c < 3; ++c)
-                q[size_t(nch) * j + size_t(c)] += d;
+            sigma2[j] = s[j] * s[j];
+            if (n)
+                sigma2[j] = std::min(sigma2[j], float(kBoundMargin * sum / n));
         }
-    ImageSpec qspec = quotient.spec();
-    qspec.x = qreg.xbegin, qspec.y = qreg.ybegin;
-    qspec.width = qreg.width(), qspec.height = qreg.height();
-    qspec.set_format(TypeFloat);
-    ImageBuf nudged(qspec), nudged_out0;
-    nudged.set_pixels(qreg, TypeFloat, q.data());
-    q = {};
-    if (!regression_filter(nudged_out0, nudged, albedo, guides, base, nullptr,
-                           pil, nthreads)) {
-        dst.errorfmt("{}", nudged_out0.geterror());
-        return false;
-    }
-    const std::vector<float> o0n = read_channels(nudged_out0, pil, 0, 3);
-    d0.assign(pil.npixels(), 1.0f);
-    for (size_t i = 0; i < d0.size(); ++i) {
-        const int x = pil.xbegin + int(i % size_t(pil.width()));
-        const int y = pil.ybegin + int(i / size_t(pil.width()));
-        const float nudge = scale[size_t(y - qreg.ybegin) * size_t(qreg.width())
-                                  + size_t(x - qreg.xbegin)];
-        if (s[i] > 0.0f && nudge > 0.0f)
-            d0[i] = nudge_sign(x - frame.xbegin, y - frame.ybegin)
-                    * (luminance(&o0n[3 * i]) - luminance(&o0[3 * i])) / nudge;
-    }
-    return true;
+    return sigma2;
 }
 
 /// The candidates run on each half's quotient alone (FILTER.md 13.3):
@@ -310,10 +304,10 @@ int
 selected_filter_halo(const FilterOptions& base)
 {
     // The choice reads the candidates over its halo, the feature regression
-    // the pilot (candidate 0) over its own, candidate 0 and its nudged run
-    // the quotient over the filter's, and the nudge its 7x7.
+    // the pilot over its own, the pilot's noise candidate 0 over its box,
+    // and candidate 0 the quotient over the filter's.
     return selection_halo(SelectionOptions {}) + feature_candidates_halo()
-           + filter_halo(base) + kScaleRadius;
+           + kVarianceRadius + filter_halo(base);
 }
 
 
@@ -341,9 +335,10 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     const int nch = quotient.nchannels();
     ROI sel = halo_region(roi, frame, selection_halo(so));
     ROI pil = halo_region(sel, frame, fo_halo);
-    ROI qreg = halo_region(pil, frame, filter_halo(base));
-    sel.chbegin = pil.chbegin = qreg.chbegin = roi.chbegin = 0;
-    sel.chend = pil.chend = qreg.chend = roi.chend = nch;
+    ROI k0reg = halo_region(pil, frame, kVarianceRadius);
+    ROI qreg = halo_region(k0reg, frame, filter_halo(base));
+    sel.chbegin = pil.chbegin = k0reg.chbegin = qreg.chbegin = roi.chbegin = 0;
+    sel.chend = pil.chend = k0reg.chend = qreg.chend = roi.chend = nch;
     auto fail = [&](const ImageBuf& from) {
         dst.errorfmt("{}", from.geterror());
         return false;
@@ -354,16 +349,26 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         return [&, lo, hi](float f) { options.progress(lo + (hi - lo) * f); };
     };
 
-    // Candidate 0 over the pilot's support (with its maps if asked for).
-    ImageBuf out0, maps;
-    base.diagnostics = options.diagnostics ? &maps : nullptr;
-    base.progress    = progress(0.0f, halves ? 0.3f : 0.4f);
-    if (!regression_filter(out0, quotient, albedo, guides, base, stats, pil,
+    // Candidate 0 over the pilot's support and its noise's box (with its
+    // maps if asked for, and its hat diagonal for SURE).
+    ImageBuf out0, maps, hat0;
+    base.diagnostics  = options.diagnostics ? &maps : nullptr;
+    base.hat_diagonal = halves ? nullptr : &hat0;
+    base.progress     = progress(0.0f, halves ? 0.3f : 0.6f);
+    if (!regression_filter(out0, quotient, albedo, guides, base, stats, k0reg,
                            nthreads))
         return fail(out0);
-    base.diagnostics = nullptr;
+    base.diagnostics = base.hat_diagonal = nullptr;
     const size_t np = pil.npixels();
     const std::vector<float> o0 = read_channels(out0, pil, 0, 3);
+    // Candidate 0's light and D over k0reg (D: 1 with halves, unused).
+    std::vector<float> o0_l = read_channels(out0, k0reg, 0, 3);
+    for (size_t k = 0; k < k0reg.npixels(); ++k)
+        o0_l[k] = luminance(&o0_l[3 * k]);
+    o0_l.resize(k0reg.npixels());
+    const std::vector<float> d0_k0 = halves
+                                         ? std::vector<float>(k0reg.npixels(), 1.0f)
+                                         : read_channels(hat0, k0reg, 0, 1);
     // Its noise estimate (section 3), decoded with the footprint it has in
     // the filter, so that it is the same in any strip: the standard
     // deviation of z_l at fit points, else 0 (no observation).
@@ -373,12 +378,13 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     // it; the outliers' spread light is added to them as to candidate 0.
     std::vector<float> zfit(3 * np, NAN);
     std::vector<double> spread(3 * sel.npixels(), 0.0);
-    std::vector<float> bound_lo, bound_hi, bound_ia;
+    std::vector<float> bound_lo, bound_hi, bound_ia, sigma2;
     {
         // The decode reaches the receivers of every outlier within r_max
-        // of the selection's pixels, and the noise estimate's footprint.
+        // of the selection's pixels, candidate 0's noise box, and the noise
+        // estimate's footprint.
         FilterInputs in;
-        const int reach = std::max(fo_halo, 2 * base.r_max);
+        const int reach = std::max(fo_halo + kVarianceRadius, 2 * base.r_max);
         if (!decode_filter_inputs(in, dst, quotient, albedo, guides, base,
                                   halo_region(sel, frame, reach + kNoiseFootprint),
                                   nthreads))
@@ -396,13 +402,15 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
             }
         spread_outliers(in, base, sel, spread, nthreads);
         radiance_bounds(in, sel, base.r_max, bound_lo, bound_hi, bound_ia);
+        if (!halves)
+            sigma2 = residual_bounded_variance(in, pil, k0reg, o0_l, d0_k0, s);
     }
 
     // What the risks need: with halves, every candidate on each half alone
     // (their cross errors rank them with no noise estimate and no D);
-    // without, candidate 0's hat diagonal. Either gives the variance of
-    // candidate 0's luminance, the pilot's.
-    std::vector<float> d0(np, 1.0f), pilot_var(np);
+    // without, candidate 0's hat diagonal and the bounded noise. Either
+    // gives the variance of candidate 0's luminance, the pilot's.
+    std::vector<float> pilot_var(np);
     ImageBuf half_z[2], half_out0[2];
     std::vector<ImageBuf> half_out1[2];
     if (halves) {
@@ -414,13 +422,15 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         for (size_t i = 0; i < np; ++i)
             pilot_var[i] = 0.25f * dif2[i];
     } else {
-        base.progress = progress(0.4f, 0.8f);
-        if (!monte_carlo_hat_diagonal(dst, quotient, albedo, guides, base, pil,
-                                      qreg, o0, s, d0, nthreads))
-            return false;
         // sum_j H_qj^2 sigma_j^2 ~ D sigma^2.
-        for (size_t i = 0; i < np; ++i)
-            pilot_var[i] = s[i] * s[i] * std::min(std::max(d0[i], 0.0f), 1.0f);
+        for (int y = pil.ybegin; y < pil.yend; ++y)
+            for (int x = pil.xbegin; x < pil.xend; ++x) {
+                const size_t i = size_t(y - pil.ybegin) * size_t(pil.width())
+                                 + size_t(x - pil.xbegin);
+                const float d = d0_k0[size_t(y - k0reg.ybegin) * size_t(k0reg.width())
+                                      + size_t(x - k0reg.xbegin)];
+                pilot_var[i] = sigma2[i] * std::min(std::max(d, 0.0f), 1.0f);
+            }
     }
     ImageBuf pilot = float_image(pil, frame, 4);
     {
@@ -474,11 +484,12 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                                  + size_t(x - pil.xbegin);
                 for (int c = 0; c < 3; ++c)
                     c0[4 * k + c] = o0[3 * i + c];
-                c0[4 * k + 3] = d0[i];
+                c0[4 * k + 3] = d0_k0[size_t(y - k0reg.ybegin) * size_t(k0reg.width())
+                                      + size_t(x - k0reg.xbegin)];
                 const float o_l = luminance(&o0[3 * i]);
                 const bool outlier = std::fabs(luminance(&z[3 * k]) - o_l)
                                      > kOutlierSigmas * s[i];
-                v[k] = outlier ? 0.0f : s[i] * s[i];
+                v[k] = outlier ? 0.0f : halves ? s[i] * s[i] : sigma2[i];
                 // relMSE (x - ref)^2 / (ref^2 + 0.01) in radiance, written
                 // in z: radiance = z (a + albedo_eps).
                 const double al = std::max(luminance(&a[3 * k]), 0.0f)

@@ -169,6 +169,8 @@ WindowFitter::splat(const WindowFit& w, StopReason reason)
             k.a[ch] = float(p.a[ch]);
             k.b[ch] = float(p.b[ch]);
         }
+        for (int t = 0; t < 6; ++t)
+            k.hat[t] = float(p.hat[t]);
         return k;
     };
     const PlaneCoeffs whole = coeffs(w.whole);
@@ -183,8 +185,10 @@ WindowFitter::splat(const WindowFit& w, StopReason reason)
     row.whole       = whole;
     row.range       = w.range;
     row.s           = m_splat_s.data();
-    for (int ch = 0; ch < 3; ++ch)
-        row.a[ch] = m_splat_a[ch].data();
+    for (int ch = 0; ch < 3; ++ch) {
+        row.a[ch]   = m_splat_a[ch].data();
+        row.hat[ch] = m_hat ? m_splat_hat[ch].data() : nullptr;
+    }
     const float* values = row.values;
     // Only output pixels receive.
     const int ya = std::max(m_y0 - R, m_out.ybegin);
@@ -227,6 +231,11 @@ WindowFitter::splat(const WindowFit& w, StopReason reason)
                 for (int ch = 0; ch < 3; ++ch)
                     acc[ch] += double(m_splat_a[ch][size_t(q)]);
                 m_wsum[o] += double(sw);
+                if (m_hat) {
+                    double* h = &(*m_hat)[kHatSums * o];
+                    for (int t = 0; t < kHatSums; ++t)
+                        h[t] += double(m_splat_hat[t][size_t(q)]);
+                }
             }
             if (m_diagnostics)
                 add_diagnostics(w, reason, o - size_t(row.n), row.n);

@@ -42,6 +42,11 @@ enum DiagnosticSum {
     kDiagnosticSums
 };
 
+/// What the hat diagonal (docs/SELECTION.md 2.5, 2.6) sums at each output
+/// pixel, kHatSums doubles a pixel: SplatRow::hat's three terms.
+/// D = (sum s H_l (1 - c (zl - A_l)) - sum s c A_l + out_l sum s c) / wsum.
+enum HatSum { kHatOwn, kHatValue, kHatValueA, kHatSums };
+
 /// Grows, fits and splats the windows of the centres of a range of rows.
 /// One per block of centres: holds the per-centre scratch (guide weights of the
 /// window) so that nothing is allocated per pixel.
@@ -49,13 +54,15 @@ class WindowFitter {
 public:
     WindowFitter(const FilterInputs& in, const FilterOptions& opt,
                  const ROI& out, std::vector<double>& acc,
-                 std::vector<double>& wsum, std::vector<double>* diagnostics)
+                 std::vector<double>& wsum, std::vector<double>* diagnostics,
+                 std::vector<double>* hat = nullptr)
         : m_in(in)
         , m_opt(opt)
         , m_out(out)
         , m_acc(acc)
         , m_wsum(wsum)
         , m_diagnostics(diagnostics)
+        , m_hat(hat)
         , m_guide(in, opt)
         , m_side(2 * opt.r_max + 1)
         , m_g(cache_size(), 0.0f)
@@ -69,6 +76,9 @@ public:
                       std::vector<float>(size_t(m_side) + kLanes, 0.0f),
                       std::vector<float>(size_t(m_side) + kLanes, 0.0f) }
     {
+        if (m_hat)
+            for (std::vector<float>& h : m_splat_hat)
+                h.assign(size_t(m_side) + kLanes, 0.0f);
     }
 
     /// Fit the window of fit point (x0, y0) and splat it (unless
@@ -126,6 +136,8 @@ private:
     std::vector<double>& m_wsum;
     /// kDiagnosticSums per output pixel, or null: no diagnostics.
     std::vector<double>* m_diagnostics;
+    /// kHatSums per output pixel, or null: no hat diagonal.
+    std::vector<double>* m_hat;
     GuideWeight m_guide;
     int m_side;
     std::vector<float> m_g;  ///< g(q; p0) over the grown window
@@ -140,7 +152,7 @@ private:
     /// The lane sums of the nine cells of a fit.
     std::vector<CellLanes> m_cells;
     /// The splat kernel's output for one row segment (and kLanes padding).
-    std::vector<float> m_splat_s, m_splat_a[3];
+    std::vector<float> m_splat_s, m_splat_a[3], m_splat_hat[3];
     int m_x0 = 0, m_y0 = 0, m_grown = -1;
     double m_zsum = 0.0;  ///< sum of zl over fit points with g > 0
     int m_zcount  = 0;
