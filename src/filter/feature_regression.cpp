@@ -7,7 +7,8 @@
 // features, with patch weights on a pilot estimate, splatted with the same
 // weights. Stages, in order:
 //   decode_points()   z, pilot, features and validity over the region
-//   fit_window()      one centre's weights, normal equations, Cholesky
+//   window_weights()  one centre's patch weights, row by row
+//   fit_window()      its normal equations, Cholesky and M^-1
 //   splat_window()    its predictions, clamped, and its hat diagonal
 //   normalise()       acc / wsum and hsum / wsum per output pixel
 
@@ -122,8 +123,15 @@ struct WindowFit {
     /// fit computes them and the splat reuses them (the patch distances
     /// are most of the work).
     std::vector<float> weight;
+    /// Scratch of window_weights(): each point's patch distance sum and
+    /// its number of terms.
+    std::vector<float> distance, terms;
     double beta[kMaxFeatures][3] = {};
     double chol[kMaxFeatures][kMaxFeatures] = {};
+    /// M^-1 as the quadratic form x^T M^-1 x: diagonal, then twice each
+    /// off-diagonal entry (a > b); independent products, not the
+    /// dependent chain of a triangular solve per splatted point.
+    double inverse[kMaxFeatures][kMaxFeatures] = {};
     float lo[3] = {}, hi[3] = {};  ///< range of the radiance of the weighted points
 };
 
@@ -145,42 +153,65 @@ features(const Points& p, size_t i0, size_t j, int dx, int dy, float inv_r,
     return n;
 }
 
-/// The weight of point (x, y) in the window centred on (x0, y0): spatial
-/// Gaussian x same id x the patch weight exp(-max(0, d2)), d2 the
-/// variance-cancelled distance of the pilot's patches (FILTER.md 13.2).
-float
-point_weight(const Points& p, const FeatureRegressionOptions& o, int x0,
-             int y0, int x, int y)
+/// The weight of every point of the window centred on (x0, y0) into
+/// fit.weight: spatial Gaussian x same id x the patch weight
+/// exp(-max(0, d2)), d2 the variance-cancelled distance of the pilot's
+/// patches (FILTER.md 13.2). The distance is summed patch offset by patch
+/// offset over whole window rows, contiguous points in float lanes (each
+/// point's terms in the same order as a point-by-point sum).
+void
+window_weights(const Points& p, const FeatureRegressionOptions& o,
+               const ROI& clip, int x0, int y0, WindowFit& fit)
 {
-    const size_t i0 = p.index(x0, y0), j = p.index(x, y);
-    if (!p.valid[j])
-        return 0.0f;
-    if (!p.id.empty() && p.id[j] != p.id[i0])
-        return 0.0f;
+    const int r = o.radius, side = 2 * r + 1, pr = o.patch_radius;
+    const ROI& region = p.region;
+    const int ylo = std::max(y0 - r, clip.ybegin), yhi = std::min(y0 + r, clip.yend - 1);
+    const int xlo = std::max(x0 - r, clip.xbegin), xhi = std::min(x0 + r, clip.xend - 1);
+    const size_t n = size_t(side) * size_t(side);
+    fit.weight.assign(n, 0.0f);
+    fit.distance.assign(n, 0.0f);
+    fit.terms.assign(n, 0.0f);
     const float k2 = o.patch_k * o.patch_k;
-    double d2 = 0.0;
-    int n     = 0;
-    const int pr = o.patch_radius;
+    auto at = [&](int x, int y) { return size_t(y - y0 + r) * size_t(side) + size_t(x - x0 + r); };
     for (int ty = -pr; ty <= pr; ++ty)
         for (int tx = -pr; tx <= pr; ++tx) {
-            const int ax = x0 + tx, ay = y0 + ty, bx = x + tx, by = y + ty;
-            if (!p.region.contains(ax, ay) || !p.region.contains(bx, by))
+            const int ax = x0 + tx, ay = y0 + ty;
+            if (!region.contains(ax, ay))
                 continue;
-            const size_t a = p.index(ax, ay), b = p.index(bx, by);
-            const double va = p.pilot_v[a], vb = p.pilot_v[b];
-            const double la = p.pilot_l[a], lb = p.pilot_l[b];
-            const double diff = la - lb;
-            // A 1 % difference is always tolerated: the pilot's own bias.
-            const double floor = 1e-4 * (la * la + lb * lb) + 1e-30;
-            d2 += (diff * diff - (va + std::min(va, vb)))
-                  / (floor + k2 * (va + vb));
-            ++n;
+            const float la = p.pilot_l[p.index(ax, ay)], va = p.pilot_v[p.index(ax, ay)];
+            // The points whose patch pixel j + (tx, ty) lies in the region.
+            const int ya = std::max(ylo, region.ybegin - ty);
+            const int yb = std::min(yhi, region.yend - 1 - ty);
+            const int xa = std::max(xlo, region.xbegin - tx);
+            const int xb = std::min(xhi, region.xend - 1 - tx);
+            for (int y = ya; y <= yb; ++y) {
+                const size_t b = p.index(xa + tx, y + ty);
+                const float* __restrict pl = &p.pilot_l[b];
+                const float* __restrict pv = &p.pilot_v[b];
+                float* __restrict d = &fit.distance[at(xa, y)];
+                float* __restrict c = &fit.terms[at(xa, y)];
+                for (int q = 0; q <= xb - xa; ++q) {
+                    const float lb = pl[q], vb = pv[q];
+                    const float diff = la - lb;
+                    // A 1 % difference is always tolerated: the pilot's own bias.
+                    const float floor = 1e-4f * (la * la + lb * lb) + 1e-30f;
+                    d[q] += (diff * diff - (va + std::min(va, vb)))
+                            / (floor + k2 * (va + vb));
+                    c[q] += 1.0f;
+                }
+            }
         }
-    if (n)
-        d2 /= n;
-    const double r2  = double(o.radius) * o.radius;
-    const double sp  = double(x - x0) * (x - x0) + double(y - y0) * (y - y0);
-    return float(std::exp(-sp / r2 - std::max(0.0, d2)));
+    const size_t i0 = p.index(x0, y0);
+    const float inv_r2 = 1.0f / float(r * r);
+    for (int y = ylo; y <= yhi; ++y)
+        for (int x = xlo; x <= xhi; ++x) {
+            const size_t j = p.index(x, y), k = at(x, y);
+            if (!p.valid[j] || (!p.id.empty() && p.id[j] != p.id[i0]))
+                continue;
+            const float d2 = fit.terms[k] > 0.0f ? fit.distance[k] / fit.terms[k] : 0.0f;
+            const float sp = float((x - x0) * (x - x0) + (y - y0) * (y - y0)) * inv_r2;
+            fit.weight[k] = std::exp(-sp - std::max(0.0f, d2));
+        }
 }
 
 /// Fit the window centred on (x0, y0); false when it has no usable centre.
@@ -196,13 +227,12 @@ fit_window(const Points& p, const FeatureRegressionOptions& o,
     double M[kMaxFeatures][kMaxFeatures] = {}, B[kMaxFeatures][3] = {};
     fit.x0 = x0, fit.y0 = y0, fit.nf = nf;
     const int side = 2 * r + 1;
-    fit.weight.assign(size_t(side) * size_t(side), 0.0f);
+    window_weights(p, o, clip, x0, y0, fit);
     for (int c = 0; c < 3; ++c)
         fit.lo[c] = fit.hi[c] = p.z[3 * i0 + c] * p.scale[3 * i0 + c];
     for (int y = std::max(y0 - r, clip.ybegin); y <= std::min(y0 + r, clip.yend - 1); ++y)
         for (int x = std::max(x0 - r, clip.xbegin); x <= std::min(x0 + r, clip.xend - 1); ++x) {
-            const float w = point_weight(p, o, x0, y0, x, y);
-            fit.weight[size_t(y - y0 + r) * size_t(side) + size_t(x - x0 + r)] = w;
+            const float w = fit.weight[size_t(y - y0 + r) * size_t(side) + size_t(x - x0 + r)];
             if (!(w > 0.0f))
                 continue;
             const size_t j = p.index(x, y);
@@ -244,6 +274,24 @@ fit_window(const Points& p, const FeatureRegressionOptions& o,
             }
         }
     }
+    // M^-1 = L^-T L^-1, from the lower triangle L^-1.
+    double Li[kMaxFeatures][kMaxFeatures] = {};
+    for (int a = 0; a < nf; ++a) {
+        Li[a][a] = 1.0 / L[a][a];
+        for (int b = 0; b < a; ++b) {
+            double t = 0.0;
+            for (int k = b; k < a; ++k)
+                t -= L[a][k] * Li[k][b];
+            Li[a][b] = t / L[a][a];
+        }
+    }
+    for (int a = 0; a < nf; ++a)
+        for (int b = 0; b <= a; ++b) {
+            double m = 0.0;
+            for (int k = a; k < nf; ++k)
+                m += Li[k][a] * Li[k][b];
+            fit.inverse[a][b] = a == b ? m : 2.0 * m;
+        }
     // beta = M^-1 B: forward then backward substitution.
     for (int c = 0; c < 3; ++c) {
         double t[kMaxFeatures];
@@ -295,15 +343,10 @@ splat_window(const Points& p, const FeatureRegressionOptions& o,
             const size_t j = p.index(x, y);
             double f[kMaxFeatures];
             features(p, i0, j, x - fit.x0, y - fit.y0, inv_r, f);
-            // ||L^-1 x||^2 = x^T M^-1 x.
-            double t[kMaxFeatures], q = 0.0;
-            for (int a = 0; a < nf; ++a) {
-                double v = f[a];
-                for (int k = 0; k < a; ++k)
-                    v -= fit.chol[a][k] * t[k];
-                t[a] = v / fit.chol[a][a];
-                q += t[a] * t[a];
-            }
+            double q = 0.0;  // x^T M^-1 x
+            for (int a = 0; a < nf; ++a)
+                for (int b = 0; b <= a; ++b)
+                    q += fit.inverse[a][b] * f[a] * f[b];
             const size_t o_ = size_t(y - roi.ybegin) * size_t(roi.width())
                               + size_t(x - roi.xbegin);
             double hl = 0.0;
