@@ -271,6 +271,12 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
                            + (p.layers.residual_is_layer ? 8.0 : 0.0);
         cost.core_pixel += 12.0 * double(p.layers.layers.size());
     }
+    // The selection's planes over its region (FILTER.md 13): candidate 0's
+    // output and hat diagonal, the pilot, the fitted quotient, the two
+    // feature regressions, the risks, its own decode of the inputs.
+    // Measured: about 200 bytes a held pixel at 1080p.
+    if (j.filter.select)
+        cost.held_pixel += 256.0;
     // The prefiltered albedo, its variance, its sums (4 doubles).
     if (p.albedo_samples)
         cost.held_pixel += 24.0 + 32.0;

@@ -96,8 +96,11 @@ add_output_costs(StripCost& cost, const OutputSink& sink,
 /// filter's internal tile: up to that, cutting the frame costs the filter
 /// nothing a whole-frame run does not pay too (a strip boundary, like a
 /// tile boundary, makes the centres within r_max of it be fitted twice).
-/// Below 256 rows that cost grows quickly (2 r_max of S rows), so strips
-/// are thinner than that only when the memory limit demands it. Refuses,
+/// Below 256 rows that cost grows quickly (2 r_max of S rows), and below
+/// three times the rows re-read around a strip (2 `around`) more than a
+/// third of the work is on rows another strip filters too (the selection's
+/// halo is twice the filter's), so strips are thinner than either only when
+/// the memory limit demands it. Refuses,
 /// before any pixel is read, a job whose strip would need more memory than
 /// allowed: an oversized (or corrupt) header must fail with a message, not
 /// get the process killed.
@@ -109,7 +112,7 @@ plan_strips(const Job& j, const InputHeader& in, const StripCost& cost,
     // Leaves room for the rest of a render node's work; a 1080p frame with
     // 54 passes takes four strips of 270 rows.
     constexpr double kComfortable = 256.0 * (1 << 20);
-    constexpr int kEfficient      = 256;
+    const int efficient           = std::max(256, 3 * 2 * cost.around);
     constexpr int kThinnest       = 16;
     const int height = cost.height;
     int rows         = 0;
@@ -124,7 +127,7 @@ plan_strips(const Job& j, const InputHeader& in, const StripCost& cost,
         needed = cost.bytes(rows);
         while (needed > budget && rows > kThinnest) {
             const int next = (height + n) / (n + 1);
-            if (next < kEfficient && needed <= double(limit))
+            if (next < efficient && needed <= double(limit))
                 break;
             ++n;
             rows   = next;
