@@ -109,7 +109,7 @@ struct FilterOptions {
     /// estimate, or the halves' cross error when half_a and half_b are
     /// given), today's filter or one of two feature regressions
     /// (docs/FILTER.md section 13, include/zdenoise/selection.h); 0 =
-    /// today's filter alone, the default while selection costs about 1.65x
+    /// today's filter alone, the default while selection costs about 1.5x
     /// the time (docs/SELECTION.md section 10).
     int select = 0;
 

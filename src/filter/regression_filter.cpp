@@ -265,19 +265,15 @@ write_hat_diagonal(ImageBuf& dst, const Splats& splats, ROI roi, int nthreads)
     return dst.set_pixels(roi, TypeFloat, d.data());
 }
 
-/// Filter the output pixels `roi` (sections 2-7), reading the inputs over
-/// roi plus the halo everything depends on. `opt.frame` is the image's data
-/// window. `hat`, if not null, receives the hat diagonal.
+}  // namespace
+
+
 bool
-filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
-            const Guides& guides, const FilterOptions& opt, ROI roi,
-            int nthreads, FilterStats& totals, ImageBuf* hat)
+detail::filter_decoded(ImageBuf& dst, const ImageBuf& quotient,
+                       const FilterInputs& in, const FilterOptions& opt,
+                       ROI roi, int nthreads, FilterStats& totals,
+                       ImageBuf* hat)
 {
-    const ROI region = halo_region(roi, opt.frame, filter_halo(opt));
-    FilterInputs in;
-    if (!decode_filter_inputs(in, dst, quotient, albedo, guides, opt, region,
-                              nthreads))
-        return false;
     Splats splats(size_t(roi.width()) * size_t(roi.height()),
                   opt.diagnostics != nullptr, hat != nullptr);
     FilterStats tile = fit_centres(in, opt, roi, nthreads, splats);
@@ -297,6 +293,24 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
     }
     totals.merge(tile);
     return true;
+}
+
+namespace {
+
+/// Filter the output pixels `roi` (sections 2-7), reading the inputs over
+/// roi plus the halo everything depends on. `opt.frame` is the image's data
+/// window. `hat`, if not null, receives the hat diagonal.
+bool
+filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
+            const Guides& guides, const FilterOptions& opt, ROI roi,
+            int nthreads, FilterStats& totals, ImageBuf* hat)
+{
+    const ROI region = halo_region(roi, opt.frame, filter_halo(opt));
+    FilterInputs in;
+    return decode_filter_inputs(in, dst, quotient, albedo, guides, opt, region,
+                                nthreads)
+           && filter_decoded(dst, quotient, in, opt, roi, nthreads, totals,
+                             hat);
 }
 
 }  // namespace

@@ -66,9 +66,6 @@ constexpr float kBoundMargin = 2.0f;
 /// the light, so pixels of similar light have similar noise.
 constexpr float kLightRatio = 2.0f;
 
-/// How far the noise estimate of a pixel looks (filter_halo()'s 6).
-constexpr int kNoiseFootprint = 6;
-
 /// Outliers are left out of the risk averages (of every candidate alike):
 /// a firefly's own squared error would decide its whole neighbourhood.
 constexpr float kOutlierSigmas = 4.0f;
@@ -349,28 +346,10 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         return [&, lo, hi](float f) { options.progress(lo + (hi - lo) * f); };
     };
 
-    // Candidate 0 over the pilot's support and its noise's box (with its
-    // maps if asked for, and its hat diagonal for SURE).
-    ImageBuf out0, maps, hat0;
-    base.diagnostics  = options.diagnostics ? &maps : nullptr;
-    base.hat_diagonal = halves ? nullptr : &hat0;
-    base.progress     = progress(0.0f, halves ? 0.3f : 0.6f);
-    if (!regression_filter(out0, quotient, albedo, guides, base, stats, k0reg,
-                           nthreads))
-        return fail(out0);
-    base.diagnostics = base.hat_diagonal = nullptr;
     const size_t np = pil.npixels();
-    const std::vector<float> o0 = read_channels(out0, pil, 0, 3);
-    // Candidate 0's light and D over k0reg (D: 1 with halves, unused).
-    std::vector<float> o0_l = read_channels(out0, k0reg, 0, 3);
-    for (size_t k = 0; k < k0reg.npixels(); ++k)
-        o0_l[k] = luminance(&o0_l[3 * k]);
-    o0_l.resize(k0reg.npixels());
-    const std::vector<float> d0_k0 = halves
-                                         ? std::vector<float>(k0reg.npixels(), 1.0f)
-                                         : read_channels(hat0, k0reg, 0, 1);
-    // Its noise estimate (section 3), decoded with the footprint it has in
-    // the filter, so that it is the same in any strip: the standard
+    ImageBuf out0, maps, hat0;
+    std::vector<float> o0, o0_l, d0_k0;
+    // Candidate 0's noise estimate (section 3) over pil: the standard
     // deviation of z_l at fit points, else 0 (no observation).
     std::vector<float> s(np, 0.0f);
     // What the feature regressions fit: the quotient of the fit points with
@@ -380,15 +359,42 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     std::vector<double> spread(3 * sel.npixels(), 0.0);
     std::vector<float> bound_lo, bound_hi, bound_ia, sigma2;
     {
-        // The decode reaches the receivers of every outlier within r_max
-        // of the selection's pixels, candidate 0's noise box, and the noise
-        // estimate's footprint.
+        // One decode of the inputs for candidate 0 and the selection's own
+        // stages: over candidate 0's region and its filter's halo, which
+        // holds the receivers of every outlier within r_max of the
+        // selection's pixels and the noise estimate's footprint.
         FilterInputs in;
-        const int reach = std::max(fo_halo + kVarianceRadius, 2 * base.r_max);
-        if (!decode_filter_inputs(in, dst, quotient, albedo, guides, base,
-                                  halo_region(sel, frame, reach + kNoiseFootprint),
+        if (!decode_filter_inputs(in, dst, quotient, albedo, guides, base, qreg,
                                   nthreads))
             return false;
+        // Candidate 0 over the pilot's support and its noise's box (with
+        // its maps if asked for, and its hat diagonal for SURE).
+        ROI r0 = k0reg;
+        if (!prepare_dst(out0, quotient, r0, "regression_filter")
+            || (options.diagnostics
+                && !prepare_diagnostics(out0, maps, k0reg, frame,
+                                        "regression_filter"))
+            || (!halves
+                && !prepare_result(out0, hat0, k0reg, frame, 1,
+                                   "regression_filter", "hat diagonal")))
+            return fail(out0);
+        base.diagnostics = options.diagnostics ? &maps : nullptr;
+        base.progress    = progress(0.0f, halves ? 0.3f : 0.6f);
+        FilterStats k0stats;
+        if (!filter_decoded(out0, quotient, in, base, k0reg, nthreads, k0stats,
+                            halves ? nullptr : &hat0))
+            return fail(out0);
+        if (stats)
+            *stats = k0stats;
+        base.diagnostics = nullptr;
+        o0 = read_channels(out0, pil, 0, 3);
+        // Candidate 0's light and D over k0reg (D: 1 with halves, unused).
+        o0_l = read_channels(out0, k0reg, 0, 3);
+        for (size_t k = 0; k < k0reg.npixels(); ++k)
+            o0_l[k] = luminance(&o0_l[3 * k]);
+        o0_l.resize(k0reg.npixels());
+        d0_k0 = halves ? std::vector<float>(k0reg.npixels(), 1.0f)
+                       : read_channels(hat0, k0reg, 0, 1);
         for (int y = pil.ybegin; y < pil.yend; ++y)
             for (int x = pil.xbegin; x < pil.xend; ++x) {
                 const size_t i = in.index(x, y);

@@ -12,6 +12,18 @@
 namespace zdenoise {
 namespace detail {
 
+struct FilterInputs;
+
+/// Today's filter (sections 2-7) over `roi` from inputs already decoded
+/// over a region that holds roi and filter_halo(opt) around it (clipped to
+/// opt.frame): the same pixels as regression_filter() (section 8), which
+/// decodes tile by tile; the selection decodes once for its own stages and
+/// candidate 0. dst must be prepared; `hat` (or null) receives the hat
+/// diagonal, opt.diagnostics the maps.
+bool filter_decoded(ImageBuf& dst, const ImageBuf& quotient,
+                    const FilterInputs& in, const FilterOptions& opt, ROI roi,
+                    int nthreads, FilterStats& totals, ImageBuf* hat);
+
 /// filter_halo() of options with select = 1, given the same options with
 /// select = 0.
 int selected_filter_halo(const FilterOptions& base);
