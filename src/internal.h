@@ -19,6 +19,15 @@ namespace detail {
 using OIIO::ImageBuf;
 using OIIO::ROI;
 
+/// regression_filter() works tile by tile, each at most this many pixels a
+/// side, so that its working memory follows the tile, not the image (the
+/// result is the whole image's: docs/FILTER.md section 8). Today's filter
+/// alone keeps about 100 bytes a pixel of a tile and its halo; the
+/// selection (select 1) about 250 over a halo twice as wide, so its tiles
+/// are larger (fewer pixels filtered twice) but as wide as a 2K frame.
+constexpr int kFilterTile    = 1024;
+constexpr int kSelectionTile = 2048;
+
 /// Rec.709 luminance weights: the scalar view of an RGB quotient.
 constexpr float kLumaWeights[3] = { 0.2126f, 0.7152f, 0.0722f };
 

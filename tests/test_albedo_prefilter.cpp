@@ -216,10 +216,24 @@ TEST_F(CliTest, CyclesAlbedoIsPrefilteredWithTheRendersSamples)
     ASSERT_TRUE(plain.read(0, 0, true, TypeFloat));
     const double with    = synth::rel_mse(pre, truth);
     const double without = synth::rel_mse(plain, truth);
+    // Today's filter alone fits the light to the albedo it is given; the
+    // selection's feature regressions also regress on the albedo, which
+    // takes up much of its noise (public set: the prefilter gains up to 24 %
+    // with the selection, docs/SELECTION.md section 11; on this crop it is
+    // even).
+    double with_today = 0.0, without_today = 0.0;
+    for (const char* flags : { "", " --no-albedo-prefilter" }) {
+        r = run("--in '" + in + "' -o '" + path("today.exr") + "' --select 0" + flags);
+        ASSERT_EQ(r.status, 0) << r.err;
+        ImageBuf today(path("today.exr"));
+        ASSERT_TRUE(today.read(0, 0, true, TypeFloat));
+        (*flags ? without_today : with_today) = synth::rel_mse(today, truth);
+    }
     std::printf("  bundled crop: relMSE %.5f without the prefilter, %.5f "
-                "with\n",
-                without, with);
-    EXPECT_LT(with, without);
+                "with; today's filter alone %.5f, %.5f\n",
+                without, with, without_today, with_today);
+    EXPECT_LT(with_today, without_today);
+    EXPECT_LT(with, 1.01 * without);
     // The output says how its albedo was taken.
     EXPECT_NE(pre.spec().get_string_attribute("zdenoise.parameters")
                   .find("mode=beauty albedo-samples=16"),

@@ -456,9 +456,11 @@ TEST(FilterQuality, FirefliesKeepTheirEnergySpreadAroundThem)
 
 // A hole of NaN radiance on a surface, wider than any window reaches
 // (40 px with r_max 16), is filled from the light around it times its own
-// albedo (docs/FILTER.md section 7): the texture under it comes back and
-// its relMSE is within a few times the frame's, in beauty and in layers.
-// (The hole lies in the lit half of a shadow edge.)
+// albedo (docs/FILTER.md section 7): the texture under it comes back, its
+// mean light is kept, and its relMSE is well below the render's noise, in
+// beauty and in layers. (The hole lies in the lit half of a shadow edge;
+// the rest of the frame is filtered far better than the hole can be, so
+// the hole is measured against the noise, not the frame.)
 TEST(FilterQuality, NanHoleIsFilledFromTheLightAroundIt)
 {
     Scene s = synth::shadow_edge(128, 128, { 16, 515 });
@@ -476,14 +478,18 @@ TEST(FilterQuality, NanHoleIsFilledFromTheLightAroundIt)
     const ImageBuf beauty  = run_denoise(s, {});
     const ImageBuf layered = zdenoise::layered_denoise(layers, nullptr);
     ASSERT_FALSE(layered.has_error()) << layered.geterror();
+    // The render's own noise, over rows the hole does not reach.
+    const double noise = synth::rel_mse(s.noisy, s.clean, 0, 128, 0, y0);
+    const double truth = synth::mean_luminance(s.clean, x0, x1, y0, y1);
     for (const ImageBuf* out : { &beauty, &layered }) {
         const char* mode = out == &beauty ? "beauty" : "layers";
         const double frame = synth::rel_mse(*out, s.clean);
         const double hole  = synth::rel_mse(*out, s.clean, x0, x1, y0, y1);
-        std::printf("  40 px NaN hole (%s): relMSE frame %.4g, hole %.4g; mean "
-                    "luminance in the hole %.4f, truth %.4f\n", mode, frame, hole,
-                    synth::mean_luminance(*out, x0, x1, y0, y1),
-                    synth::mean_luminance(s.clean, x0, x1, y0, y1));
-        EXPECT_LT(hole, 4.0 * frame) << mode;
+        const double mean  = synth::mean_luminance(*out, x0, x1, y0, y1);
+        std::printf("  40 px NaN hole (%s): relMSE frame %.4g, hole %.4g, the "
+                    "render's noise %.4g; mean luminance in the hole %.4f, truth "
+                    "%.4f\n", mode, frame, hole, noise, mean, truth);
+        EXPECT_LT(hole, 0.5 * noise) << mode;
+        EXPECT_NEAR(mean, truth, 0.03 * truth) << mode;
     }
 }

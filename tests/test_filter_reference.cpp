@@ -166,6 +166,7 @@ small_options()
     zdenoise::FilterOptions opt;
     opt.r_max         = 5;
     opt.centre_stride = 1;  // the exact filter; StridedCentres has the rest
+    opt.select        = 0;  // the reference is today's filter (sections 2-8)
     return opt;
 }
 

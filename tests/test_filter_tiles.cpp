@@ -1,9 +1,9 @@
 // Copyright zdenoise contributors.
 // SPDX-License-Identifier: BSD-3-Clause
 //
-// Frames wider or taller than the filter's internal tile (1024 pixels) are
-// processed tile by tile in bounded memory; the result must be exactly the
-// one of untiled runs over parts of the frame. So must a run over a strip
+// Frames wider or taller than the filter's internal tile (1024 pixels, 2048
+// with the selection) are processed tile by tile in bounded memory; the
+// result must be exactly the one of runs over other parts of the frame. So must a run over a strip
 // of rows that holds only the rows it needs (filter_halo() around them) and
 // names the whole frame (FilterOptions::frame), as the job streams frames.
 
@@ -24,33 +24,40 @@ using OIIO::ROI;
 
 TEST(FilterTiles, TiledFrameEqualsUntiledParts)
 {
-    // 1100 px wide: two internal tiles; each ROI part below is one tile.
-    synth::Scene s = synth::shadow_edge(1100, 24, { 64, 3 });
-    zdenoise::Guides g;
-    g.variance = &s.variance;
-    zdenoise::FilterOptions opt;
-    opt.r_max  = 8;
-    zdenoise::FilterStats whole_stats;
-    ImageBuf whole = zdenoise::denoise(s.noisy, s.albedo, g, opt, &whole_stats);
-    ASSERT_FALSE(whole.has_error()) << whole.geterror();
+    // Two internal tiles wide (1024 pixels, 2048 with the selection); the
+    // ROI parts below cut it elsewhere.
+    for (const int select : { 0, 1 }) {
+        SCOPED_TRACE(testing::Message() << "select " << select);
+        const int tile = select ? 2048 : 1024, width = tile + 76;
+        synth::Scene s = synth::shadow_edge(width, 24, { 64, 3 });
+        zdenoise::Guides g;
+        g.variance = &s.variance;
+        zdenoise::FilterOptions opt;
+        opt.r_max  = 8;
+        opt.select = select;
+        zdenoise::FilterStats whole_stats;
+        ImageBuf whole = zdenoise::denoise(s.noisy, s.albedo, g, opt, &whole_stats);
+        ASSERT_FALSE(whole.has_error()) << whole.geterror();
 
-    int64_t windows = 0;
-    for (ROI part : { ROI(0, 600, 0, 24, 0, 1, 0, 3), ROI(600, 1100, 0, 24, 0, 1, 0, 3) }) {
-        zdenoise::FilterStats st;
-        ImageBuf piece = zdenoise::denoise(s.noisy, s.albedo, g, opt, &st, part);
-        ASSERT_FALSE(piece.has_error()) << piece.geterror();
-        windows += st.windows;
-        for (int y = part.ybegin; y < part.yend; ++y)
-            for (int x = part.xbegin; x < part.xend; ++x)
-                for (int c = 0; c < 3; ++c) {
-                    const float a = whole.getchannel(x, y, 0, c);
-                    const float b = piece.getchannel(x, y, 0, c);
-                    ASSERT_EQ(std::memcmp(&a, &b, sizeof(float)), 0)
-                        << "pixel " << x << "," << y << " channel " << c;
-                }
+        int64_t windows = 0;
+        for (ROI part : { ROI(0, tile / 2, 0, 24, 0, 1, 0, 3),
+                          ROI(tile / 2, width, 0, 24, 0, 1, 0, 3) }) {
+            zdenoise::FilterStats st;
+            ImageBuf piece = zdenoise::denoise(s.noisy, s.albedo, g, opt, &st, part);
+            ASSERT_FALSE(piece.has_error()) << piece.geterror();
+            windows += st.windows;
+            for (int y = part.ybegin; y < part.yend; ++y)
+                for (int x = part.xbegin; x < part.xend; ++x)
+                    for (int c = 0; c < 3; ++c) {
+                        const float a = whole.getchannel(x, y, 0, c);
+                        const float b = piece.getchannel(x, y, 0, c);
+                        ASSERT_EQ(std::memcmp(&a, &b, sizeof(float)), 0)
+                            << "pixel " << x << "," << y << " channel " << c;
+                    }
+        }
+        EXPECT_EQ(windows, whole_stats.windows) << "every centre counted once";
+        EXPECT_EQ(whole_stats.pixels, int64_t(width) * 24);
     }
-    EXPECT_EQ(windows, whole_stats.windows) << "every centre counted once";
-    EXPECT_EQ(whole_stats.pixels, 1100 * 24);
 }
 
 
@@ -88,20 +95,24 @@ TEST(FilterTiles, StripsGivenTheFrameEqualTheWholeFrame)
 {
     // Each strip sees only its rows and the halo around them, as a
     // streaming reader holds them; with FilterOptions::frame the result is
-    // the whole-frame one, with all guides and strided centres too.
+    // the whole-frame one, with all guides and strided centres too, for
+    // today's filter alone and with the selection (the default).
     synth::Scene s = synth::two_objects_cryptomatte(40, 90, { 4, 7 });
     const ImageBuf noisy = synth::shifted(s.noisy, 3, -5);
     const ImageBuf albedo = synth::shifted(s.albedo, 3, -5);
     const ImageBuf normal = synth::shifted(s.normal, 3, -5);
     const ImageBuf depth = synth::shifted(s.depth, 3, -5);
     const ImageBuf ids = synth::shifted(s.object_id, 3, -5);
-    const int strides[][2] = { { 1, 1 }, { 3, 1 }, { 3, 0 } };  // stride, edges
-    for (const auto& [stride, edges] : strides) {
-        SCOPED_TRACE(testing::Message() << "stride " << stride << " edges " << edges);
+    // stride, edges, select
+    const int cases[][3] = { { 1, 1, 0 }, { 3, 1, 0 }, { 3, 0, 0 }, { 3, 1, 1 } };
+    for (const auto& [stride, edges, select] : cases) {
+        SCOPED_TRACE(testing::Message() << "stride " << stride << " edges " << edges
+                                        << " select " << select);
         zdenoise::FilterOptions opt;
         opt.r_max         = 6;
         opt.centre_stride = stride;
         opt.stride_edges  = edges;
+        opt.select        = select;
         zdenoise::Guides g;
         g.normal    = &normal;
         g.depth     = &depth;
@@ -111,7 +122,8 @@ TEST(FilterTiles, StripsGivenTheFrameEqualTheWholeFrame)
         ASSERT_FALSE(whole.has_error()) << whole.geterror();
 
         const int halo = zdenoise::filter_halo(opt);
-        EXPECT_EQ(halo, 2 * opt.r_max + 6 + stride - 1);
+        if (!select)
+            EXPECT_EQ(halo, 2 * opt.r_max + 6 + stride - 1);
         opt.frame = noisy.roi();
         int64_t windows = 0;
         const ROI f = noisy.roi();

@@ -242,6 +242,7 @@ TEST(RegressionFilter, HatDiagonalIsTheOutputsDerivative)
     for (float value_k : { 0.0f, 1.0f }) {
         SCOPED_TRACE(value_k ? "value term" : "no value term");
         zdenoise::FilterOptions opt;
+        opt.select  = 0;
         opt.r_max   = 6;
         opt.value_k = value_k;
         ImageBuf hat;

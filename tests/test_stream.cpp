@@ -227,7 +227,9 @@ TEST_F(StreamTest, StripsWriteTheWholeFrameFileAt1080p)
     RunResult strips = run("--in " + path("frame.exr") + " -o " + path("strips.exr")
                            + " --tile 96 -v");
     ASSERT_EQ(strips.status, 0) << strips.err;
-    EXPECT_NE(strips.out.find("12 strips of 96 rows, each read with 40 rows of halo"),
+    // The halo: the filter's 2 * 16 + 6 + 2 and the selection's 44 (its
+    // choice's 10, the feature regressions' 31, the noise bound's 3).
+    EXPECT_NE(strips.out.find("12 strips of 96 rows, each read with 84 rows of halo"),
               std::string::npos)
         << strips.out;
     expect_same_file(path("whole.exr"), path("strips.exr"));
@@ -253,17 +255,18 @@ TEST_F(StreamTest, StripsOfTiledFilesOffsetWindowsAndLayersAreExact)
     big.passes = false;
     write_frame(path("guides.exr"), big);
     // Rows read around a strip: the filter's halo, 2 * 6 + 6 + 2 (the
-    // default stride 3 reaches 2 further), and in layers mode also the
-    // reach of the residual layer's mask, r_max.
+    // default stride 3 reaches 2 further), the selection's 44, and in
+    // layers mode also the reach of the residual layer's mask, r_max.
     struct Case {
         const char* name;
         std::string args;
         const char* tile;
         const char* around;
     } cases[] = {
-        { "beauty", "", "1", "20" },
-        { "layers", " --mode layers --aovs -d float", "23", "26" },
-        { "guide file", " --normal:ch=\"Denoising Normal\" " + path("guides.exr"), "50", "20" },
+        { "beauty", "", "1", "64" },
+        { "layers", " --mode layers --aovs -d float", "23", "70" },
+        { "guide file", " --normal:ch=\"Denoising Normal\" " + path("guides.exr"), "50", "64" },
+        { "today's filter", " --select 0", "1", "20" },
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.name);
@@ -304,17 +307,19 @@ TEST_F(StreamTest, MemoryFollowsTheStripNotTheFrame)
                     "resident memory meaningless";
 #    endif
 #endif
-    // 4096 x 4096 with albedo, normal and depth: as float, the inputs the
-    // filter uses alone are 4096 * 4096 * 11 * 4 bytes = 704 MiB. Mostly
-    // sky, so that the filter has little to do, and run-length encoded,
-    // which is quick to write and read.
-    const int n = 4096;
-    FrameOptions f { n, n, 0.0f };
+    // 2048 x 8192 with albedo, normal and depth: as float, the inputs the
+    // filter uses alone are 2048 * 8192 * 11 * 4 bytes = 704 MiB. Tall, so
+    // that a strip (64 rows and twice the halo of 84, with the selection's
+    // planes, about 256 bytes a pixel) is a small part of it. Mostly sky,
+    // so that the filter has little to do, and run-length encoded, which
+    // is quick to write and read.
+    const int w = 2048, h = 8192;
+    FrameOptions f { w, h, 0.0f };
     f.passes      = false;
     f.sky         = 0.99f;
     f.compression = "rle";
     write_frame(path("big.exr"), f);
-    const double whole_frame = double(n) * n * 11 * 4;
+    const double whole_frame = double(w) * h * 11 * 4;
     RunResult r = cli_harness::run_command(
         cli_harness::quoted(ZDENOISE_PEAK_RSS) + " " + cli_harness::quoted(ZDENOISE_CLI)
             + " --in " + path("big.exr") + " -o " + path("out.exr") + " --tile 64",
@@ -325,7 +330,7 @@ TEST_F(StreamTest, MemoryFollowsTheStripNotTheFrame)
     // strips of 64 rows, a few tens.
     EXPECT_LT(double(peak), 0.5 * whole_frame)
         << "peak resident memory " << peak / (1 << 20) << " MiB";
-    std::printf("  4096x4096 in strips of 64 rows: peak %lld MiB (the "
+    std::printf("  2048x8192 in strips of 64 rows: peak %lld MiB (the "
                 "inputs used, as float: %.0f MiB)\n",
                 (long long)(peak >> 20), whole_frame / (1 << 20));
 }

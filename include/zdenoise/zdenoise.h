@@ -108,10 +108,11 @@ struct FilterOptions {
     /// 1 = each pixel takes, by its estimated error (Stein's unbiased risk
     /// estimate, or the halves' cross error when half_a and half_b are
     /// given), today's filter or one of two feature regressions
-    /// (docs/FILTER.md section 13, include/zdenoise/selection.h); 0 =
-    /// today's filter alone, the default while selection costs about 1.5x
-    /// the time (docs/SELECTION.md section 10).
-    int select = 0;
+    /// (docs/FILTER.md section 13, include/zdenoise/selection.h), the
+    /// default: better on every public case, about 1.5x the time and twice
+    /// the memory of 0 = today's filter alone, the method's own
+    /// (docs/SELECTION.md section 10).
+    int select = 1;
 
     /// Optional progress report with the fraction done in [0,1], called from
     /// one thread at a time (not necessarily the caller's). Not a filter
@@ -146,7 +147,7 @@ struct FilterOptions {
     /// filtered light luminance follows its own quotient luminance, every
     /// weight held fixed but the value term's (docs/FILTER.md 13.3). Stein's
     /// unbiased risk estimate of the filter's error needs it; 1 where the
-    /// pixel is passed through. Not with `select` (the selection computes
+    /// pixel is passed through. Only with select 0 (the selection computes
     /// its own); layered_denoise() ignores it. Not a filter parameter: it
     /// never changes the result.
     ImageBuf* hat_diagonal = nullptr;
@@ -163,6 +164,7 @@ struct FilterOptions {
         o.radius_growth = 1.0f;
         o.centre_stride = 1;
         o.outlier_spread = 0;
+        o.select = 0;
         return o;
     }
 };

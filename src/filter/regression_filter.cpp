@@ -107,10 +107,11 @@ struct Splats {
 /// Fit and splat every centre the output pixels `roi` depend on (sections
 /// 5, 6 and 8): the blocks of one phase in parallel, the phases in order,
 /// so that every pixel receives its contributions in one fixed order.
-/// Returns the windows' statistics, summed in block order.
+/// Returns the statistics of the windows centred in `counted`, summed in
+/// block order.
 FilterStats
 fit_centres(const FilterInputs& in, const FilterOptions& opt, const ROI& roi,
-            int nthreads, Splats& splats)
+            const ROI& counted, int nthreads, Splats& splats)
 {
     const CentreBlocks blocks(opt, opt.frame, roi);
     const int nblocks = blocks.count();
@@ -121,7 +122,7 @@ fit_centres(const FilterInputs& in, const FilterOptions& opt, const ROI& roi,
         WindowFitter fitter(in, opt, roi, splats.acc, splats.wsum,
                             opt.diagnostics ? &splats.diagnostics : nullptr,
                             splats.hat.empty() ? nullptr : &splats.hat);
-        fit_block(blocks, b, in, opt, roi, fitter, block_stats[size_t(b)]);
+        fit_block(blocks, b, in, opt, counted, fitter, block_stats[size_t(b)]);
         const int64_t done = ++blocks_done;
         if (opt.progress) {
             std::lock_guard<std::mutex> lock(progress_mutex);
@@ -146,11 +147,12 @@ fit_centres(const FilterInputs& in, const FilterOptions& opt, const ROI& roi,
 /// The output pixels `roi` into dst (section 7): RGB from acc / wsum where
 /// a channel receives and something was splatted, else passed through (0
 /// if not finite); other channels copied from the quotient. Counts the
-/// output, passed-through and non-finite pixels into st.
+/// output, passed-through and non-finite pixels in `counted` into st.
 bool
 normalise_output(ImageBuf& dst, const ImageBuf& quotient,
                  const FilterInputs& in, const FilterOptions& opt,
-                 const Splats& splats, ROI roi, int nthreads, FilterStats& st)
+                 const Splats& splats, ROI roi, const ROI& counted,
+                 int nthreads, FilterStats& st)
 {
     const size_t npix_out = size_t(roi.width()) * size_t(roi.height());
     ROI all_ch = roi;
@@ -184,8 +186,9 @@ normalise_output(ImageBuf& dst, const ImageBuf& quotient,
                         v = (cl & (kReceiveR << ch)) && hole_found > 0 ? hole[ch] : 0.0f;
                 }
             }
-            pt += passed;
-            nf += (cl & kNonFinite) != 0;
+            const bool c = counted.contains(x, int(y));
+            pt += c && passed;
+            nf += c && (cl & kNonFinite) != 0;
         }
         passthrough += pt;
         nonfinite += nf;
@@ -195,7 +198,7 @@ normalise_output(ImageBuf& dst, const ImageBuf& quotient,
             dst.errorfmt("regression_filter: could not store the result");
         return false;
     }
-    st.pixels += int64_t(npix_out);
+    st.pixels += int64_t(roi_intersection(roi, counted).npixels());
     st.passthrough_pixels += passthrough;
     st.nonfinite_pixels += nonfinite;
     return true;
@@ -271,14 +274,15 @@ write_hat_diagonal(ImageBuf& dst, const Splats& splats, ROI roi, int nthreads)
 bool
 detail::filter_decoded(ImageBuf& dst, const ImageBuf& quotient,
                        const FilterInputs& in, const FilterOptions& opt,
-                       ROI roi, int nthreads, FilterStats& totals,
-                       ImageBuf* hat)
+                       ROI roi, const ROI& counted, int nthreads,
+                       FilterStats& totals, ImageBuf* hat)
 {
     Splats splats(size_t(roi.width()) * size_t(roi.height()),
                   opt.diagnostics != nullptr, hat != nullptr);
-    FilterStats tile = fit_centres(in, opt, roi, nthreads, splats);
+    FilterStats tile = fit_centres(in, opt, roi, counted, nthreads, splats);
     spread_outliers(in, opt, roi, splats.spread, nthreads);
-    if (!normalise_output(dst, quotient, in, opt, splats, roi, nthreads, tile))
+    if (!normalise_output(dst, quotient, in, opt, splats, roi, counted, nthreads,
+                          tile))
         return false;
     if (opt.diagnostics
         && !write_diagnostics(*opt.diagnostics, in, splats, roi, nthreads)) {
@@ -309,8 +313,8 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
     FilterInputs in;
     return decode_filter_inputs(in, dst, quotient, albedo, guides, opt, region,
                                 nthreads)
-           && filter_decoded(dst, quotient, in, opt, roi, nthreads, totals,
-                             hat);
+           && filter_decoded(dst, quotient, in, opt, roi, roi, nthreads,
+                             totals, hat);
 }
 
 }  // namespace
@@ -380,14 +384,10 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         && !detail::prepare_result(dst, *hat, roi, tile_opt.frame, 1, opname,
                                     "hat diagonal"))
         return false;
-    if (options.select)
-        return detail::selected_regression_filter(dst, quotient, albedo, guides,
-                                                  tile_opt, stats, roi, nthreads);
-
-    // Tiles bound the working memory (about 100 bytes per pixel of a tile
-    // and its halo) whatever the frame size; the result is exactly the
-    // whole-image one (section 8), so the tile size is not a parameter.
-    constexpr int kTile = 1024;
+    // Tiles bound the working memory whatever the frame size; the result
+    // is exactly the whole-image one (section 8), so the tile size is not
+    // a parameter.
+    const int kTile  = options.select ? detail::kSelectionTile : detail::kFilterTile;
     const int ntx = (roi.width() + kTile - 1) / kTile;
     const int nty = (roi.height() + kTile - 1) / kTile;
     const int ntiles = ntx * nty;
@@ -401,8 +401,14 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
             tile_opt.progress = [&](float f) {
                 options.progress((float(t) + f) / float(ntiles));
             };
-        if (!filter_tile(dst, quotient, albedo, guides, tile_opt, tile,
-                         nthreads, totals, hat))
+        if (options.select) {
+            FilterStats st;
+            if (!detail::selected_regression_filter(dst, quotient, albedo, guides,
+                                                    tile_opt, &st, tile, nthreads))
+                return false;
+            totals.merge(st);
+        } else if (!filter_tile(dst, quotient, albedo, guides, tile_opt, tile,
+                                nthreads, totals, hat))
             return false;
     }
     if (stats)

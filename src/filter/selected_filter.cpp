@@ -381,8 +381,9 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         base.diagnostics = options.diagnostics ? &maps : nullptr;
         base.progress    = progress(0.0f, halves ? 0.3f : 0.6f);
         FilterStats k0stats;
-        if (!filter_decoded(out0, quotient, in, base, k0reg, nthreads, k0stats,
-                            halves ? nullptr : &hat0))
+        // Its statistics are the output pixels' (roi), as without select.
+        if (!filter_decoded(out0, quotient, in, base, k0reg, roi, nthreads,
+                            k0stats, halves ? nullptr : &hat0))
             return fail(out0);
         if (stats)
             *stats = k0stats;

@@ -271,12 +271,13 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
                            + (p.layers.residual_is_layer ? 8.0 : 0.0);
         cost.core_pixel += 12.0 * double(p.layers.layers.size());
     }
-    // The selection's planes over its region (FILTER.md 13): candidate 0's
-    // output and hat diagonal, the pilot, the fitted quotient, the two
-    // feature regressions, the risks, its own decode of the inputs.
-    // Measured: about 200 bytes a held pixel at 1080p.
-    if (j.filter.select)
-        cost.held_pixel += 256.0;
+    // The filter's tile: its decoded planes and accumulators (192 bytes a
+    // pixel, on the safe side); with select also the selection's planes
+    // (FILTER.md 13: candidate 0's output and hat diagonal, the pilot, the
+    // fitted quotient, the two feature regressions, the risks; 1080p in 2
+    // strips: 812 MiB peak, this estimate 860 MiB).
+    cost.tile       = j.filter.select ? detail::kSelectionTile : detail::kFilterTile;
+    cost.tile_pixel = j.filter.select ? 320.0 : 192.0;
     // The prefiltered albedo, its variance, its sums (4 doubles).
     if (p.albedo_samples)
         cost.held_pixel += 24.0 + 32.0;

@@ -100,7 +100,8 @@ add_output_costs(StripCost& cost, const OutputSink& sink,
 /// three times the rows re-read around a strip (2 `around`) more than a
 /// third of the work is on rows another strip filters too (the selection's
 /// halo is twice the filter's), so strips are thinner than either only when
-/// the memory limit demands it. Refuses,
+/// one would need more than 1 GiB (very wide frames: 16384 pixels) or the
+/// memory limit demands it. Refuses,
 /// before any pixel is read, a job whose strip would need more memory than
 /// allowed: an oversized (or corrupt) header must fail with a message, not
 /// get the process killed.
@@ -112,6 +113,9 @@ plan_strips(const Job& j, const InputHeader& in, const StripCost& cost,
     // Leaves room for the rest of a render node's work; a 1080p frame with
     // 54 passes takes four strips of 270 rows.
     constexpr double kComfortable = 256.0 * (1 << 20);
+    // What a strip may take to stay efficient: a 1080p frame with the
+    // selection takes 2 strips of 540 rows at about 850 MiB.
+    constexpr double kEfficient = 1024.0 * (1 << 20);
     const int efficient           = std::max(256, 3 * 2 * cost.around);
     constexpr int kThinnest       = 16;
     const int height = cost.height;
@@ -122,12 +126,12 @@ plan_strips(const Job& j, const InputHeader& in, const StripCost& cost,
         needed = cost.bytes(rows);
     } else {
         const double budget = std::min(double(limit), kComfortable);
-        int n  = (height + StripCost::kFilterTile - 1) / StripCost::kFilterTile;
+        int n  = (height + cost.tile - 1) / cost.tile;
         rows   = (height + n - 1) / n;
         needed = cost.bytes(rows);
         while (needed > budget && rows > kThinnest) {
             const int next = (height + n) / (n + 1);
-            if (next < efficient && needed <= double(limit))
+            if (next < efficient && needed <= std::min(double(limit), kEfficient))
                 break;
             ++n;
             rows   = next;

@@ -15,6 +15,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include "../internal.h"
 #include "input_files.h"
 #include "job.h"
 
@@ -35,10 +36,12 @@ struct StripCost {
     int halo   = 0;  ///< the filter's (filter_halo())
     int around = 0;  ///< rows read above and below a strip (>= halo)
 
-    /// Filter: per pixel of one internal tile of regression_filter()
-    /// (1024 x 1024) with its halo, its decoded planes and accumulators.
-    static constexpr double kTileBytesPerPixel = 192;
-    static constexpr int kFilterTile           = 1024;
+    /// The filter's working memory: per pixel of one internal tile of
+    /// regression_filter() with its halo (its decoded planes, accumulators
+    /// and, with select, the selection's planes), and the tile's side
+    /// (detail::kFilterTile, or kSelectionTile with select).
+    double tile_pixel = 0;
+    int tile          = 0;
     /// Output rows are assembled and written this many at a time.
     static constexpr int kBandRows = 32;
 
@@ -46,14 +49,12 @@ struct StripCost {
     {
         const double held = std::min(double(height),
                                      double(rows) + 2.0 * around);
-        const double tile_w = std::min(double(width),
-                                       double(kFilterTile) + 2.0 * halo);
-        const double tile_h = std::min(held,
-                                       double(kFilterTile) + 2.0 * halo);
+        const double tile_w = std::min(double(width), double(tile) + 2.0 * halo);
+        const double tile_h = std::min(held, double(tile) + 2.0 * halo);
         return fixed + file_row * held + held_pixel * width * held
                + core_pixel * width * double(rows)
                + out_row * std::min(rows, kBandRows)
-               + kTileBytesPerPixel * tile_w * tile_h;
+               + tile_pixel * tile_w * tile_h;
     }
 };
 

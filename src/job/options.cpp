@@ -290,8 +290,8 @@ options()
         parameter({ Kind::Whole, "--select", "select", FIELD(job.filter.select), "0|1",
           "1: each pixel takes today's filter or one of two\n"
           "feature regressions, by its estimated error (SURE, or\n"
-          "the halves' cross error; about 1.5x the time;\n"
-          "docs/FILTER.md section 13) (0)" }),
+          "the halves' cross error; docs/FILTER.md section 13);\n"
+          "0: today's filter alone, 1.5x faster (1)" }),
         always_written({ Kind::Whole, "--threads", "threads", FIELD(job.threads), "N",
           "Threads (default: all cores); results do not depend\n"
           "on it." }),
