@@ -109,7 +109,7 @@ coverage_variance(AlbedoPlanes& p, int samples, int nthreads)
                 const float t     = range > 1e-6f ? (a - lo) / range : 0.0f;
                 p.v[i] = range * range * t * (1.0f - t) / strata;
             }
-    }, paropt(nthreads));
+    }, detail::paropt_any_length(nthreads));
 }
 
 
@@ -273,7 +273,7 @@ prefilter_albedo(ImageBuf& dst, const ImageBuf& albedo, int samples, ROI roi,
         rows.ybegin = roi.ybegin + band * kBandRows;
         rows.yend   = std::min(rows.ybegin + kBandRows, roi.yend);
         filter_rows(p, rows, roi, acc, wsum, filtered);
-    }, paropt(nthreads, paropt::SplitDir::Y, 1));  // a task a band
+    }, detail::paropt_any_length(nthreads));  // a task a band
     // RGB from the weighted means (the pixel itself always weighs 1); a
     // value that is not finite, and the other channels, as they were.
     ROI all    = roi;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/parallel.h>
 
 #include <zdenoise/zdenoise.h>
 
@@ -27,6 +28,18 @@ using OIIO::ROI;
 /// are larger (fewer pixels filtered twice) but as wide as a 2K frame.
 constexpr int kFilterTile    = 1024;
 constexpr int kSelectionTile = 2048;
+
+/// Parallel options that split a range of any length over the threads
+/// (nthreads 0: all). OIIO's default paropt runs a range of fewer than
+/// 16384 items on the calling thread alone, which left every loop over the
+/// rows of a strip (or over a few thousand outliers) serial. Each item of
+/// such a loop writes its own outputs, so the result does not depend on the
+/// split.
+inline OIIO::paropt
+paropt_any_length(int nthreads)
+{
+    return OIIO::paropt(nthreads, OIIO::paropt::SplitDir::Y, 1);
+}
 
 /// Rec.709 luminance weights: the scalar view of an RGB quotient.
 constexpr float kLumaWeights[3] = { 0.2126f, 0.7152f, 0.0722f };

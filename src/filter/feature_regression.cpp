@@ -462,7 +462,7 @@ feature_regression(ImageBuf& dst, const ImageBuf& quotient,
             for (int x0 = cx0; x0 <= cx1; x0 += s)
                 if (fit_window(p, o, clip, x0, y0, fit))
                     splat_window(p, o, clip, roi, fit, sums);
-        }, paropt(nthreads, paropt::SplitDir::Y, 1));
+        }, detail::paropt_any_length(nthreads));
     }
     const size_t nout = roi.npixels();
     std::vector<float> out(4 * nout);

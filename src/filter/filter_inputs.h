@@ -20,6 +20,8 @@
 
 #include <OpenImageIO/imagebufalgo_util.h>
 
+#include "../internal.h"
+
 namespace zdenoise {
 namespace detail {
 
@@ -143,7 +145,7 @@ for_rows(const ROI& region, int nthreads, F&& row)
 {
     OIIO::parallel_for(int64_t(region.ybegin), int64_t(region.yend),
                        [&](int64_t y) { row(int(y)); },
-                       OIIO::paropt(nthreads));
+                       paropt_any_length(nthreads));
 }
 
 /// Decode the quotient, albedo and guides over `region` and estimate the

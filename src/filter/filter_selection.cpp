@@ -61,7 +61,7 @@ box_sum(const std::vector<double>& v, int w, int h, int r, int nthreads)
                 s += src[t];
             dst[x] = s;
         }
-    }, paropt(nthreads));
+    }, detail::paropt_any_length(nthreads));
     parallel_for(int64_t(0), int64_t(h), [&](int64_t y) {
         for (int x = 0; x < w; ++x) {
             double s = 0.0;
@@ -69,7 +69,7 @@ box_sum(const std::vector<double>& v, int w, int h, int r, int nthreads)
                 s += row[size_t(t) * size_t(w) + size_t(x)];
             out[size_t(y) * size_t(w) + size_t(x)] = s;
         }
-    }, paropt(nthreads));
+    }, detail::paropt_any_length(nthreads));
     return out;
 }
 
@@ -99,7 +99,7 @@ sure_risk(ImageBuf& dst, const ImageBuf& candidate, const ImageBuf& quotient,
             const double var = v[size_t(i)];
             const double r   = w[size_t(i)] * (e * e - var + 2.0 * var * c[4 * i + 3]);
             out[size_t(i)]   = var > 0.0 && std::isfinite(r) ? float(r) : NAN;
-        }, paropt(nthreads));
+        }, detail::paropt_any_length(nthreads));
     });
 }
 
@@ -131,7 +131,7 @@ halves_risk(ImageBuf& dst, const ImageBuf& candidate_a,
             const double eb = double(detail::luminance(&fb[3 * i])) - detail::luminance(&za[3 * i]);
             const double r  = w[size_t(i)] * 0.5 * (ea * ea + eb * eb);
             out[size_t(i)]  = std::isfinite(r) ? float(r) : NAN;
-        }, paropt(nthreads));
+        }, detail::paropt_any_length(nthreads));
     });
 }
 

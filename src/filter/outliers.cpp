@@ -180,7 +180,7 @@ spread_outliers(const FilterInputs& in, const FilterOptions& opt,
             }
         }
         norm[size_t(k)] = sum;
-    }, OIIO::paropt(nthreads));
+    }, paropt_any_length(nthreads));
     // Pass 2, per output row: z_c(q) += excess_c w(q) / norm_c, the outliers
     // in raster order (each row on its own: any thread count, same sums).
     // The light added is smooth, and its radiance is the excess.
@@ -212,7 +212,7 @@ spread_outliers(const FilterInputs& in, const FilterOptions& opt,
                         s[c] += double(o.excess[c]) * double(w) / norm[k][size_t(c)];
             }
         }
-    }, OIIO::paropt(nthreads));
+    }, paropt_any_length(nthreads));
 }
 
 }  // namespace detail

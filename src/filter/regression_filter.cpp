@@ -136,7 +136,7 @@ fit_centres(const FilterInputs& in, const FilterOptions& opt, const ROI& roi,
                 of_phase.push_back(b);
         parallel_for(int64_t(0), int64_t(of_phase.size()),
                      [&](int64_t j) { run_block(of_phase[size_t(j)]); },
-                     paropt(nthreads, paropt::SplitDir::Y, 1));
+                     paropt_any_length(nthreads));
     }
     FilterStats total;
     for (const FilterStats& s : block_stats)
@@ -192,7 +192,7 @@ normalise_output(ImageBuf& dst, const ImageBuf& quotient,
         }
         passthrough += pt;
         nonfinite += nf;
-    }, paropt(nthreads));
+    }, paropt_any_length(nthreads));
     if (!dst.set_pixels(all_ch, TypeFloat, out.data())) {
         if (!dst.has_error())
             dst.errorfmt("regression_filter: could not store the result");
@@ -238,7 +238,7 @@ write_diagnostics(ImageBuf& dst, const FilterInputs& in, const Splats& splats,
                 code = StopCode::Edge;
             m[1] = float(int(code));
         }
-    }, paropt(nthreads));
+    }, paropt_any_length(nthreads));
     ROI maps_roi    = roi;
     maps_roi.chbegin = 0;
     maps_roi.chend   = 4;
@@ -262,7 +262,7 @@ write_hat_diagonal(ImageBuf& dst, const Splats& splats, ROI roi, int nthreads)
                               + double(kLumaWeights[2]) * a[2]) / w;
         const double* h = &splats.hat[kHatSums * size_t(o)];
         d[size_t(o)] = float((h[kHatOwn] - h[kHatValueA] + out_l * h[kHatValue]) / w);
-    }, paropt(nthreads));
+    }, paropt_any_length(nthreads));
     roi.chbegin = 0;
     roi.chend   = 1;
     return dst.set_pixels(roi, TypeFloat, d.data());

@@ -213,7 +213,7 @@ Output::write(const Strip& strip, const RowReader& in,
                               row + offset[size_t(r.first)],
                               row_types[size_t(r.first)],
                               stride_t(pixel_bytes), r.count, width);
-        }, paropt(threads));
+        }, detail::paropt_any_length(threads));
         for (size_t c = 0; c < channels.size(); ++c) {
             const OutputChannel& oc = channels[c];
             if (oc.file >= 0)

@@ -9,6 +9,7 @@
 #include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
 
+#include "../internal.h"
 #include "failure.h"
 
 namespace zdenoise {
@@ -73,7 +74,7 @@ Strip::image(const Selection& s, bool read_only) const
                           rows.stride(c), dst + 4 * r.first, TypeFloat,
                           pixel, r.count, held.width());
         }
-    }, paropt(threads));
+    }, detail::paropt_any_length(threads));
     return img;
 }
 
