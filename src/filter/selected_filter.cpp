@@ -112,14 +112,14 @@ feature_candidates()
 void
 radiance_bounds(const FilterInputs& in, const ROI& out, int r_max,
                 std::vector<float>& lo, std::vector<float>& hi,
-                std::vector<float>& inv_albedo)
+                std::vector<float>& inv_albedo, int nthreads)
 {
     const float inf = std::numeric_limits<float>::infinity();
     const ROI rows(out.xbegin, out.xend, std::max(out.ybegin - r_max, in.region.ybegin),
                    std::min(out.yend + r_max, in.region.yend));
     const size_t w = size_t(out.width()), n = out.npixels();
     std::vector<float> rlo(3 * w * size_t(rows.height())), rhi(rlo.size());
-    for (int y = rows.ybegin; y < rows.yend; ++y)
+    for_rows(rows, nthreads, [&](int y) {
         for (int x = out.xbegin; x < out.xend; ++x) {
             float l[3] = { inf, inf, inf }, h[3] = { -inf, -inf, -inf };
             for (int u = std::max(x - r_max, in.region.xbegin);
@@ -136,10 +136,11 @@ radiance_bounds(const FilterInputs& in, const ROI& out, int r_max,
             for (int c = 0; c < 3; ++c)
                 rlo[k + size_t(c)] = l[c], rhi[k + size_t(c)] = h[c];
         }
+    });
     lo.assign(3 * n, inf);
     hi.assign(3 * n, -inf);
     inv_albedo.assign(3 * n, 0.0f);
-    for (int y = out.ybegin; y < out.yend; ++y)
+    for_rows(out, nthreads, [&](int y) {
         for (int x = out.xbegin; x < out.xend; ++x) {
             const size_t k = 3 * (size_t(y - out.ybegin) * w + size_t(x - out.xbegin));
             for (int v = std::max(y - r_max, rows.ybegin); v < std::min(y + r_max + 1, rows.yend); ++v) {
@@ -152,6 +153,7 @@ radiance_bounds(const FilterInputs& in, const ROI& out, int r_max,
             for (int c = 0; c < 3; ++c)
                 inv_albedo[k + size_t(c)] = in.inv_albedo[c][in.index(x, y)];
         }
+    });
 }
 
 /// The largest halo of the feature-regression candidates.
@@ -180,7 +182,7 @@ std::vector<float>
 residual_bounded_variance(const FilterInputs& in, const ROI& pil,
                           const ROI& k0reg, const std::vector<float>& out_l,
                           const std::vector<float>& d0,
-                          const std::vector<float>& s)
+                          const std::vector<float>& s, int nthreads)
 {
     const int kw = k0reg.width();
     auto at      = [&](int x, int y) {
@@ -188,7 +190,7 @@ residual_bounded_variance(const FilterInputs& in, const ROI& pil,
     };
     // Each pixel's term (z_l - out_l)^2 / (1 - 2 D), NaN where it has none.
     std::vector<float> term(k0reg.npixels(), NAN);
-    for (int y = k0reg.ybegin; y < k0reg.yend; ++y)
+    for_rows(k0reg, nthreads, [&](int y) {
         for (int x = k0reg.xbegin; x < k0reg.xend; ++x) {
             const size_t i = in.index(x, y), k = at(x, y);
             if (!(in.cls[i] & kFitPoint) || !(d0[k] < 0.5f))
@@ -198,8 +200,9 @@ residual_bounded_variance(const FilterInputs& in, const ROI& pil,
             if (std::fabs(r) <= kOutlierSigmas * sd)
                 term[k] = r * r / (1.0f - 2.0f * std::max(d0[k], 0.0f));
         }
+    });
     std::vector<float> sigma2(pil.npixels(), 0.0f);
-    for (int y = pil.ybegin; y < pil.yend; ++y)
+    for_rows(pil, nthreads, [&](int y) {
         for (int x = pil.xbegin; x < pil.xend; ++x) {
             const size_t j = size_t(y - pil.ybegin) * size_t(pil.width())
                              + size_t(x - pil.xbegin);
@@ -222,6 +225,7 @@ residual_bounded_variance(const FilterInputs& in, const ROI& pil,
             if (n)
                 sigma2[j] = std::min(sigma2[j], float(kBoundMargin * sum / n));
         }
+    });
     return sigma2;
 }
 
@@ -396,7 +400,7 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         o0_l.resize(k0reg.npixels());
         d0_k0 = halves ? std::vector<float>(k0reg.npixels(), 1.0f)
                        : read_channels(hat0, k0reg, 0, 1);
-        for (int y = pil.ybegin; y < pil.yend; ++y)
+        for_rows(pil, nthreads, [&](int y) {
             for (int x = pil.xbegin; x < pil.xend; ++x) {
                 const size_t i = in.index(x, y);
                 const size_t k = size_t(y - pil.ybegin) * size_t(pil.width())
@@ -407,10 +411,12 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                         zfit[3 * k + size_t(c)] = in.zfit[c][i];
                 }
             }
+        });
         spread_outliers(in, base, sel, spread, nthreads);
-        radiance_bounds(in, sel, base.r_max, bound_lo, bound_hi, bound_ia);
+        radiance_bounds(in, sel, base.r_max, bound_lo, bound_hi, bound_ia, nthreads);
         if (!halves)
-            sigma2 = residual_bounded_variance(in, pil, k0reg, o0_l, d0_k0, s);
+            sigma2 = residual_bounded_variance(in, pil, k0reg, o0_l, d0_k0, s,
+                                               nthreads);
     }
 
     // What the risks need: with halves, every candidate on each half alone
