@@ -43,18 +43,27 @@ struct KernelInput {
     }
 };
 
-void
-run_filter(benchmark::State& state, const KernelInput& in, int nthreads)
+/// Every fit point a centre: the cost of the window kernel itself, the same
+/// whatever the lattice (the default stride 3 fits about 60 % of the
+/// windows on the perf frame); today's filter alone (candidate 0 of the
+/// selection, which Selection times whole).
+zdenoise::FilterOptions
+kernel_options()
 {
-    // Every fit point a centre: the cost of the window kernel itself, the
-    // same whatever the lattice (the default stride 3 fits about 60 % of
-    // the windows on the perf frame).
-    zdenoise::FilterOptions kernel_options;
-    kernel_options.centre_stride = 1;
+    zdenoise::FilterOptions o;
+    o.centre_stride = 1;
+    o.select        = 0;
+    return o;
+}
+
+void
+run_filter(benchmark::State& state, const KernelInput& in, int nthreads,
+           const zdenoise::FilterOptions& options = kernel_options())
+{
     zdenoise::FilterStats stats;
     for (auto _ : state) {
         OIIO::ImageBuf out = zdenoise::regression_filter(in.quotient, in.scene.albedo, in.guides,
-                                                         kernel_options, &stats, {}, nthreads);
+                                                         options, &stats, {}, nthreads);
         benchmark::DoNotOptimize(out.localpixels());
     }
     const double pixels = double(stats.pixels) * double(state.iterations());
@@ -89,10 +98,34 @@ StaircaseThreads(benchmark::State& state)
     run_filter(state, in, int(state.range(0)));
 }
 
+/// The cost per pixel against r_max (range(0)) where windows grow to it:
+/// fine texture at 2 spp. A window tries radii 2, 4, ..., r_max, so its
+/// cost grows as r_max^2 (issue 17 asks for at most r_max beyond 16).
+void
+RMax(benchmark::State& state)
+{
+    const KernelInput in(synth::fine_texture(kSize, kSize, { 2, 7 }));
+    zdenoise::FilterOptions o = kernel_options();
+    o.r_max                   = int(state.range(0));
+    run_filter(state, in, 1, o);
+}
+
+/// The default filter (the selection, docs/FILTER.md section 13, default
+/// stride) on the staircase at 8 spp: candidate 0, the feature
+/// regressions, the risks and the choice.
+void
+Selection(benchmark::State& state)
+{
+    const KernelInput in(synth::staircase(kSize, kSize, 8, { 8, 7 }));
+    run_filter(state, in, 1, zdenoise::FilterOptions {});
+}
+
 }  // namespace
 
 BENCHMARK(Staircase)->Arg(2)->Arg(8)->Arg(32)->Arg(128)->Unit(benchmark::kMillisecond);
 BENCHMARK(FineTexture)->Arg(2)->Arg(8)->Arg(32)->Arg(128)->Unit(benchmark::kMillisecond);
 BENCHMARK(StaircaseThreads)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(RMax)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMillisecond);
+BENCHMARK(Selection)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();
