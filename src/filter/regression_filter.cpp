@@ -275,7 +275,8 @@ bool
 detail::filter_decoded(ImageBuf& dst, const ImageBuf& quotient,
                        const FilterInputs& in, const FilterOptions& opt,
                        ROI roi, const ROI& counted, int nthreads,
-                       FilterStats& totals, ImageBuf* hat)
+                       FilterStats& totals, ImageBuf* hat,
+                       std::vector<double>* spread_light)
 {
     Splats splats(size_t(roi.width()) * size_t(roi.height()),
                   opt.diagnostics != nullptr, hat != nullptr);
@@ -296,6 +297,8 @@ detail::filter_decoded(ImageBuf& dst, const ImageBuf& quotient,
         return false;
     }
     totals.merge(tile);
+    if (spread_light)
+        *spread_light = std::move(splats.spread);
     return true;
 }
 

@@ -22,6 +22,7 @@
 
 #include <zdenoise/selection.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -31,7 +32,6 @@
 
 #include "filter_inputs.h"
 #include "internal.h"
-#include "outliers.h"
 
 namespace zdenoise {
 namespace detail {
@@ -385,9 +385,10 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         base.diagnostics = options.diagnostics ? &maps : nullptr;
         base.progress    = progress(0.0f, halves ? 0.3f : 0.6f);
         FilterStats k0stats;
+        std::vector<double> k0spread;
         // Its statistics are the output pixels' (roi), as without select.
         if (!filter_decoded(out0, quotient, in, base, k0reg, roi, nthreads,
-                            k0stats, halves ? nullptr : &hat0))
+                            k0stats, halves ? nullptr : &hat0, &k0spread))
             return fail(out0);
         if (stats)
             *stats = k0stats;
@@ -412,7 +413,14 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                 }
             }
         });
-        spread_outliers(in, base, sel, spread, nthreads);
+        // The outliers' spread light over sel: candidate 0's (each pixel's
+        // sum is the same over any region that holds it).
+        for_rows(sel, nthreads, [&](int y) {
+            const size_t k  = size_t(y - sel.ybegin) * size_t(sel.width());
+            const size_t k0 = size_t(y - k0reg.ybegin) * size_t(k0reg.width())
+                              + size_t(sel.xbegin - k0reg.xbegin);
+            std::copy_n(&k0spread[3 * k0], 3 * size_t(sel.width()), &spread[3 * k]);
+        });
         radiance_bounds(in, sel, base.r_max, bound_lo, bound_hi, bound_ia, nthreads);
         if (!halves)
             sigma2 = residual_bounded_variance(in, pil, k0reg, o0_l, d0_k0, s,

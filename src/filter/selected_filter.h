@@ -19,12 +19,13 @@ struct FilterInputs;
 /// opt.frame): the same pixels as regression_filter() (section 8), which
 /// decodes tile by tile; the selection decodes once for its own stages and
 /// candidate 0. dst must be prepared; `hat` (or null) receives the hat
-/// diagonal, opt.diagnostics the maps. Adds the statistics of the windows
-/// and pixels in `counted` to totals.
+/// diagonal, opt.diagnostics the maps, `spread_light` (or null) the
+/// outliers' spread light over roi (3 doubles a pixel, spread_outliers()).
+/// Adds the statistics of the windows and pixels in `counted` to totals.
 bool filter_decoded(ImageBuf& dst, const ImageBuf& quotient,
                     const FilterInputs& in, const FilterOptions& opt, ROI roi,
                     const ROI& counted, int nthreads, FilterStats& totals,
-                    ImageBuf* hat);
+                    ImageBuf* hat, std::vector<double>* spread_light = nullptr);
 
 /// filter_halo() of options with select = 1, given the same options with
 /// select = 0.
