@@ -390,28 +390,27 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     // Tiles bound the working memory whatever the frame size; the result
     // is exactly the whole-image one (section 8), so the tile size is not
     // a parameter.
-    const int kTile  = options.select ? detail::kSelectionTile : detail::kFilterTile;
-    const int ntx = (roi.width() + kTile - 1) / kTile;
-    const int nty = (roi.height() + kTile - 1) / kTile;
+    const int side = options.select ? detail::kSelectionTile : detail::kFilterTile;
+    const int ntx  = (roi.width() + side - 1) / side;
+    const int nty  = (roi.height() + side - 1) / side;
     const int ntiles = ntx * nty;
     FilterStats totals;
     for (int t = 0; t < ntiles; ++t) {
-        ROI tile(roi.xbegin + (t % ntx) * kTile, 0, roi.ybegin + (t / ntx) * kTile, 0,
+        ROI tile(roi.xbegin + (t % ntx) * side, 0, roi.ybegin + (t / ntx) * side, 0,
                  roi.zbegin, roi.zend, roi.chbegin, roi.chend);
-        tile.xend = std::min(tile.xbegin + kTile, roi.xend);
-        tile.yend = std::min(tile.ybegin + kTile, roi.yend);
+        tile.xend = std::min(tile.xbegin + side, roi.xend);
+        tile.yend = std::min(tile.ybegin + side, roi.yend);
         if (options.progress)
             tile_opt.progress = [&](float f) {
                 options.progress((float(t) + f) / float(ntiles));
             };
-        if (options.select) {
-            FilterStats st;
-            if (!detail::selected_regression_filter(dst, quotient, albedo, guides,
-                                                    tile_opt, &st, tile, nthreads))
-                return false;
-            totals.merge(st);
-        } else if (!filter_tile(dst, quotient, albedo, guides, tile_opt, tile,
-                                nthreads, totals, hat))
+        const bool done
+            = options.select
+                  ? detail::selected_regression_filter(dst, quotient, albedo, guides,
+                                                       tile_opt, tile, nthreads, totals)
+                  : filter_tile(dst, quotient, albedo, guides, tile_opt, tile,
+                                nthreads, totals, hat);
+        if (!done)
             return false;
     }
     if (stats)

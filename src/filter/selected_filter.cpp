@@ -315,8 +315,8 @@ selected_filter_halo(const FilterOptions& base)
 bool
 selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                            const ImageBuf& albedo, const Guides& guides,
-                           const FilterOptions& options, FilterStats* stats,
-                           ROI roi, int nthreads)
+                           const FilterOptions& options, ROI roi, int nthreads,
+                           FilterStats& totals)
 {
     const ROI& frame = options.frame;
     FilterOptions base = options;
@@ -384,14 +384,11 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
             return fail(out0);
         base.diagnostics = options.diagnostics ? &maps : nullptr;
         base.progress    = progress(0.0f, halves ? 0.3f : 0.6f);
-        FilterStats k0stats;
         std::vector<double> k0spread;
         // Its statistics are the output pixels' (roi), as without select.
         if (!filter_decoded(out0, quotient, in, base, k0reg, roi, nthreads,
-                            k0stats, halves ? nullptr : &hat0, &k0spread))
+                            totals, halves ? nullptr : &hat0, &k0spread))
             return fail(out0);
-        if (stats)
-            *stats = k0stats;
         base.diagnostics = nullptr;
         o0 = read_channels(out0, pil, 0, 3);
         // Candidate 0's light and D over k0reg (D: 1 with halves, unused).

@@ -32,11 +32,12 @@ bool filter_decoded(ImageBuf& dst, const ImageBuf& quotient,
 int selected_filter_halo(const FilterOptions& base);
 
 /// regression_filter() with select = 1, after its argument checks: `options`
-/// has its frame defined, `roi` lies in it, dst is prepared.
+/// has its frame defined, `roi` lies in it, dst is prepared. Adds the
+/// statistics of roi's windows (candidate 0's) and pixels to totals.
 bool selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                                 const ImageBuf& albedo, const Guides& guides,
-                                const FilterOptions& options,
-                                FilterStats* stats, ROI roi, int nthreads);
+                                const FilterOptions& options, ROI roi,
+                                int nthreads, FilterStats& totals);
 
 }  // namespace detail
 }  // namespace zdenoise
