@@ -110,6 +110,18 @@ RMax(benchmark::State& state)
     run_filter(state, in, 1, o);
 }
 
+/// RMax with the trial radii beyond the default r_max (16) fitted on the
+/// pyramid's level 1 (FilterOptions::pyramid_radius 32, docs/FILTER.md 5.1).
+void
+RMaxPyramid(benchmark::State& state)
+{
+    const KernelInput in(synth::fine_texture(kSize, kSize, { 2, 7 }));
+    zdenoise::FilterOptions o = kernel_options();
+    o.r_max                   = int(state.range(0));
+    o.pyramid_radius          = 32;
+    run_filter(state, in, 1, o);
+}
+
 /// The default filter (the selection, docs/FILTER.md section 13, default
 /// stride) on the staircase at 8 spp: candidate 0, the feature
 /// regressions, the risks and the choice.
@@ -126,6 +138,7 @@ BENCHMARK(Staircase)->Arg(2)->Arg(8)->Arg(32)->Arg(128)->Unit(benchmark::kMillis
 BENCHMARK(FineTexture)->Arg(2)->Arg(8)->Arg(32)->Arg(128)->Unit(benchmark::kMillisecond);
 BENCHMARK(StaircaseThreads)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(RMax)->Arg(16)->Arg(32)->Arg(64)->Unit(benchmark::kMillisecond);
+BENCHMARK(RMaxPyramid)->Arg(32)->Arg(64)->Unit(benchmark::kMillisecond);
 BENCHMARK(Selection)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

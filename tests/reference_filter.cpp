@@ -344,6 +344,16 @@ private:
     };
     static Fit fit(const std::vector<Pt>& pts);
     Window window(int x0, int y0, int R) const;
+    /// Section 5.1: radius R fitted on the 2x2 blocks (else as window()).
+    Window window_on_pyramid(int x0, int y0, int R) const;
+    Window window_at(int x0, int y0, int R) const
+    {
+        return opt.pyramid_radius > 0 && R >= opt.pyramid_radius
+                   ? window_on_pyramid(x0, y0, R)
+                   : window(x0, y0, R);
+    }
+    /// eta and the edge test of section 5 for W's fit over `good`.
+    void stop_tests(Window& W, const std::vector<Pt>& good) const;
     double value_term(int xq, int yq, double m) const
     {
         double vt = double(opt.value_k) * std::abs(zl(xq, yq) - m)
@@ -617,6 +627,14 @@ Filter::window(int x0, int y0, int R) const
         W.quad[m] = fit(q);
     }
 
+    stop_tests(W, good);
+    return W;
+}
+
+
+void
+Filter::stop_tests(Window& W, const std::vector<Pt>& good) const
+{
     // eta
     if (W.whole.present) {
         double sw = 0.0, sw2s2 = 0.0;
@@ -641,6 +659,157 @@ Filter::window(int x0, int y0, int R) const
                 W.edge = true;
         }
     }
+}
+
+
+// Section 5.1: the same fit on the blocks of 2x2 pixels (anchored at pixel
+// 0) that lie wholly in the window and the image, are surface, share their
+// id and have a planar inverse depth, each standing for its good fit
+// points with their weights summed; the range stays the fine points'.
+Filter::Window
+Filter::window_on_pyramid(int x0, int y0, int R) const
+{
+    auto floor_half = [](int v) { return v >= 0 ? v / 2 : -((1 - v) / 2); };
+    const int bxa = floor_half(std::max(x0 - R, 0) + 1);
+    const int bxb = floor_half(std::min(x0 + R, w - 1) - 1);
+    const int bya = floor_half(std::max(y0 - R, 0) + 1);
+    const int byb = floor_half(std::min(y0 + R, h - 1) - 1);
+    const double gx = g.depth ? zeta_gradient(x0, y0, 1, 0) : 0.0;
+    const double gy = g.depth ? zeta_gradient(x0, y0, 0, 1) : 0.0;
+    struct Block {
+        double dx, dy, g, P = 0.0, zl = 0.0, z[3] = {}, vs = 0.0, s2 = 0.0;
+    };
+    std::vector<Block> blocks;
+    double zsum = 0.0;
+    int zcount  = 0;
+    for (int by = bya; by <= byb; ++by)
+        for (int bx = bxa; bx <= bxb; ++bx) {
+            const int px[4][2] = { { 2 * bx, 2 * by }, { 2 * bx + 1, 2 * by },
+                                   { 2 * bx, 2 * by + 1 },
+                                   { 2 * bx + 1, 2 * by + 1 } };
+            bool valid = true;
+            for (auto& p : px)
+                valid = valid && inside_surface(p[0], p[1]);
+            if (!valid)
+                continue;
+            if (g.object_id)
+                for (auto& p : px)
+                    for (int c = 0; c < g.object_id->nch; ++c)
+                        valid = valid
+                                && g.object_id->at(p[0], p[1], c)
+                                       == g.object_id->at(px[0][0], px[0][1], c);
+            Block b;
+            b.dx = 2.0 * bx + 0.5 - x0;
+            b.dy = 2.0 * by + 0.5 - y0;
+            b.g  = 1.0;
+            if (g.depth) {
+                double zeta_mean = 0.0;
+                for (auto& p : px)
+                    zeta_mean += 0.25 * zeta(p[0], p[1]);
+                for (auto& p : px)
+                    valid = valid
+                            && std::abs(zeta(p[0], p[1]) - zeta_mean)
+                                   <= double(opt.depth_tolerance)
+                                          * std::abs(zeta_mean);
+                const double zhat = zeta(x0, y0) + gx * b.dx + gy * b.dy;
+                if (zhat <= 0.0
+                    || std::abs(zeta_mean - zhat)
+                           > double(opt.depth_tolerance) * zhat)
+                    b.g = 0.0;
+            }
+            if (!valid)
+                continue;
+            if (g.normal) {
+                Normal n;
+                for (auto& p : px) {
+                    const Normal np = normal_at(p[0], p[1]);
+                    for (int c = 0; c < 3; ++c)
+                        n.n[c] += np.n[c];
+                }
+                const double len = std::sqrt(dot(n, n));
+                n.none = !(len >= 1e-6);
+                for (int c = 0; c < 3; ++c)
+                    n.n[c] = n.none ? 0.0 : n.n[c] / len;
+                const Normal n0 = normal_at(x0, y0);
+                double wn = 1.0;
+                if (n.none != n0.none)
+                    wn = 0.0;
+                else if (!n.none) {
+                    const double d = std::min(1.0, dot(n, n0));
+                    wn = d > opt.normal_cut
+                             ? std::pow(d, double(opt.normal_power))
+                             : 0.0;
+                }
+                b.g *= wn;
+            }
+            if (g.object_id)
+                b.g *= weight_id(px[0][0], px[0][1], x0, y0);
+            if (!(b.g > 0.0))
+                continue;
+            for (auto& p : px) {
+                if (!fitpt(p[0], p[1]))
+                    continue;
+                zsum += zl(p[0], p[1]);
+                ++zcount;
+                const double sg = sigma(p[0], p[1]);
+                if (!(sg <= double(opt.sigma_good)))
+                    continue;
+                const double pw = std::exp(-sg);
+                b.P += pw;
+                b.zl += pw * zl(p[0], p[1]);
+                for (int c = 0; c < 3; ++c)
+                    b.z[c] += pw * z.at(p[0], p[1], c);
+                b.vs += pw * pw * Vs(p[0], p[1]);
+                b.s2 += pw * pw * sg * sg;
+            }
+            if (b.P > 0.0)
+                blocks.push_back(b);
+        }
+    if (zcount == 0 || blocks.empty())
+        return window(x0, y0, R);
+    Window W;
+    W.R = R;
+    W.m = zsum / zcount;
+    std::vector<Pt> good;
+    const double R2 = double(R) * R;
+    for (const Block& b : blocks) {
+        Pt p;
+        p.x = p.y = 0;  // unused: quadrants by the signs of u, v below
+        p.u     = b.dx / R;
+        p.v     = b.dy / R;
+        const double zlb = b.zl / b.P;
+        const double vt  = std::min(double(opt.value_k) * std::abs(zlb - W.m)
+                                        / std::max(std::abs(W.m), EPS),
+                                    30.0);
+        p.w = b.g * b.P * std::exp(-(vt + (b.dx * b.dx + b.dy * b.dy) / R2));
+        for (int c = 0; c < 3; ++c)
+            p.z[c] = b.z[c] / b.P;
+        p.vs    = b.vs / (b.P * b.P);
+        p.sigma = std::sqrt(b.s2) / b.P;
+        good.push_back(p);
+    }
+    W.whole = fit(good);
+    if (!W.whole.present)
+        return window(x0, y0, R);
+    for (int m = 0; m < 4; ++m) {
+        std::vector<Pt> q;
+        for (const Pt& p : good) {
+            const bool in = (m == 0)   ? (p.u > 0 && p.v > 0)
+                            : (m == 1) ? (p.u < 0 && p.v > 0)
+                            : (m == 2) ? (p.u < 0 && p.v < 0)
+                                       : (p.u > 0 && p.v < 0);
+            if (in)
+                q.push_back(p);
+        }
+        W.quad[m] = fit(q);
+    }
+    // The range of the fine good points, as the exact window has it.
+    const Window fine = window(x0, y0, R);
+    for (int c = 0; c < 3; ++c) {
+        W.llo[c] = fine.llo[c];
+        W.lhi[c] = fine.lhi[c];
+    }
+    stop_tests(W, good);
     return W;
 }
 
@@ -757,9 +926,9 @@ Filter::run(RefStats* stats, RefImage* diagnostics)
         // to r_max; an edge steps back to the radius tried before.
         int before = 0;
         for (int R = opt.r_min;;) {
-            Window W = window(x0, y0, R);
+            Window W = window_at(x0, y0, R);
             if (W.edge) {
-                fin = (R > opt.r_min) ? window(x0, y0, before) : W;
+                fin = (R > opt.r_min) ? window_at(x0, y0, before) : W;
                 ++st.stop_edge;
                 edge = true;
                 code = 3;

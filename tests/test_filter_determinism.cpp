@@ -63,10 +63,14 @@ struct Fixture {
 TEST(FilterDeterminism, ThreadCountGivesBitIdenticalOutput)
 {
     Fixture f;
-    for (int rmax : { 16, 5 }) {
+    // r_max, and the pyramid radius (docs/FILTER.md 5.1)
+    const int cases[][2] = { { 16, 0 }, { 5, 0 }, { 16, 8 } };
+    for (const auto& [rmax, pyramid] : cases) {
         zdenoise::FilterOptions opt;
-        opt.r_max = rmax;
-        SCOPED_TRACE("r_max " + std::to_string(rmax));
+        opt.r_max          = rmax;
+        opt.pyramid_radius = pyramid;
+        SCOPED_TRACE("r_max " + std::to_string(rmax) + ", pyramid "
+                     + std::to_string(pyramid));
         zdenoise::FilterStats st1;
         ImageBuf ref = zdenoise::denoise(f.s.noisy, f.s.albedo, f.g, opt, &st1,
                                          {}, 1);
@@ -94,8 +98,11 @@ TEST(FilterDeterminism, ThreadCountGivesBitIdenticalOutput)
 TEST(FilterDeterminism, RoiGivesExactlyTheWholeImagePixels)
 {
     Fixture f;
+    for (int pyramid : { 0, 4 }) {
+    SCOPED_TRACE("pyramid " + std::to_string(pyramid));
     zdenoise::FilterOptions opt;
-    opt.r_max = 8;
+    opt.r_max          = 8;
+    opt.pyramid_radius = pyramid;
     ImageBuf whole = zdenoise::denoise(f.s.noisy, f.s.albedo, f.g, opt);
     ASSERT_FALSE(whole.has_error()) << whole.geterror();
     ImageBuf z      = zdenoise::demodulate(f.s.noisy, f.s.albedo);
@@ -131,6 +138,7 @@ TEST(FilterDeterminism, RoiGivesExactlyTheWholeImagePixels)
                 << "regression_filter: ROI pixels differ from the whole-image run";
         }
     }
+    }
 }
 
 // Moving every input's data window (strips are anchored at its origin)
@@ -138,8 +146,11 @@ TEST(FilterDeterminism, RoiGivesExactlyTheWholeImagePixels)
 TEST(FilterDeterminism, DataWindowOriginDoesNotChangeTheResult)
 {
     Fixture f;
+    for (int pyramid : { 0, 4 }) {
+    SCOPED_TRACE("pyramid " + std::to_string(pyramid));
     zdenoise::FilterOptions opt;
-    opt.r_max    = 6;
+    opt.r_max          = 6;
+    opt.pyramid_radius = pyramid;  // its blocks are anchored at the origin
     ImageBuf ref = zdenoise::denoise(f.s.noisy, f.s.albedo, f.g, opt);
     ASSERT_FALSE(ref.has_error()) << ref.geterror();
 
@@ -159,6 +170,7 @@ TEST(FilterDeterminism, DataWindowOriginDoesNotChangeTheResult)
     EXPECT_EQ(out.spec().y, oy);
     EXPECT_EQ(count_bit_differences(synth::pixels(ref), synth::pixels(out)), 0u)
         << "moving the data window origin changed pixel values";
+    }
 }
 
 // The progress callback is called, ends at 1, and changes nothing.

@@ -309,6 +309,46 @@ TEST(FilterReference, StridedCentres)
         }
 }
 
+// Large radii fitted on the pyramid's level 1 (docs/FILTER.md 5.1): radii
+// 4 and 8 on the 2x2 blocks, across creases, depth steps and object ids,
+// with every centre and strided.
+TEST(FilterReference, PyramidFits)
+{
+    for (int stride : { 1, 3 }) {
+        const std::string name = ", pyramid 4, stride " + std::to_string(stride);
+        Case k{ "shadow edge, 16 spp, normal, depth" + name,
+                synth::shadow_edge(80, 72, { 16, 40 }) };
+        k.normal = k.depth      = true;
+        k.opt.r_max             = 8;
+        k.opt.pyramid_radius    = 4;
+        k.opt.centre_stride     = stride;
+        run_case(k);
+        Case q{ "staircase, 32 spp, depth, normal, id" + name,
+                synth::staircase(80, 72, 5, { 32, 41 }) };
+        q.depth = q.normal = q.id = true;
+        q.opt.r_max             = 8;
+        q.opt.pyramid_radius    = 4;
+        q.opt.centre_stride     = stride;
+        q.whole_denoise         = true;
+        run_case(q);
+    }
+    // The comparison is of the pyramid's fits: they are not the exact ones.
+    const Scene s = synth::shadow_edge(80, 72, { 16, 40 });
+    zdenoise::FilterOptions exact = small_options();
+    exact.r_max                   = 8;
+    zdenoise::FilterOptions pyramid = exact;
+    pyramid.pyramid_radius          = 4;
+    const ImageBuf z = zdenoise::demodulate(s.noisy, s.albedo);
+    const std::vector<float> a = synth::pixels(
+        zdenoise::regression_filter(z, s.albedo, {}, exact));
+    const std::vector<float> b = synth::pixels(
+        zdenoise::regression_filter(z, s.albedo, {}, pyramid));
+    size_t differ = 0;
+    for (size_t i = 0; i < a.size(); ++i)
+        differ += std::fabs(a[i] - b[i]) > 1e-4f * std::fabs(a[i]);
+    EXPECT_GT(differ, a.size() / 10);
+}
+
 TEST(FilterReference, GeometricRadiusGrowth)
 {
     // radius_growth 1.5 tries radii 2, 3, 4, 6, 8 and 2 tries 2, 4, 8 (up

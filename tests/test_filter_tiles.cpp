@@ -103,16 +103,19 @@ TEST(FilterTiles, StripsGivenTheFrameEqualTheWholeFrame)
     const ImageBuf normal = synth::shifted(s.normal, 3, -5);
     const ImageBuf depth = synth::shifted(s.depth, 3, -5);
     const ImageBuf ids = synth::shifted(s.object_id, 3, -5);
-    // stride, edges, select
-    const int cases[][3] = { { 1, 1, 0 }, { 3, 1, 0 }, { 3, 0, 0 }, { 3, 1, 1 } };
-    for (const auto& [stride, edges, select] : cases) {
+    // stride, edges, select, pyramid radius (docs/FILTER.md 5.1)
+    const int cases[][4] = { { 1, 1, 0, 0 }, { 3, 1, 0, 0 }, { 3, 0, 0, 0 },
+                             { 3, 1, 1, 0 }, { 3, 1, 1, 4 } };
+    for (const auto& [stride, edges, select, pyramid] : cases) {
         SCOPED_TRACE(testing::Message() << "stride " << stride << " edges " << edges
-                                        << " select " << select);
+                                        << " select " << select << " pyramid "
+                                        << pyramid);
         zdenoise::FilterOptions opt;
-        opt.r_max         = 6;
-        opt.centre_stride = stride;
-        opt.stride_edges  = edges;
-        opt.select        = select;
+        opt.r_max          = 6;
+        opt.centre_stride  = stride;
+        opt.stride_edges   = edges;
+        opt.select         = select;
+        opt.pyramid_radius = pyramid;
         zdenoise::Guides g;
         g.normal    = &normal;
         g.depth     = &depth;

@@ -105,6 +105,12 @@ struct FilterOptions {
     /// twice as fast and better on the whole public benchmark
     /// (docs/FILTER.md section 9).
     float radius_growth = 2.0f;
+    /// Trial radii at or above this are fitted on the pyramid's first
+    /// level, the fit points averaged 2x2 (a quarter of the points: radius
+    /// 2R costs what radius R does), and splatted at full resolution
+    /// (docs/FILTER.md 5.1); 0 = every fit at full resolution, the exact
+    /// filter. At least 4.
+    int pyramid_radius = 0;
     /// 1 = each pixel takes, by its estimated error (Stein's unbiased risk
     /// estimate, or the halves' cross error when half_a and half_b are
     /// given), today's filter or one of two feature regressions

@@ -67,14 +67,17 @@ decode_object_ids(FilterInputs& in, ImageBuf& dst, const ImageBuf& guide)
 void
 GuideWeight::centre(int x0, int y0)
 {
-    m_x0 = x0;
-    m_y0 = y0;
-    m_i0 = m_in.index(x0, y0);
+    m_x0 = float(x0);
+    m_y0 = float(y0);
+    const size_t i0 = m_in.index(x0, y0);
+    m_n0   = m_in.normal.empty() ? nullptr : &m_in.normal[3 * i0];
+    m_ids0 = m_in.id_pairs > 0 ? &m_in.ids[size_t(2 * m_in.id_pairs) * i0]
+                               : nullptr;
     if (m_in.id_pairs == -1)
-        m_id0 = m_in.ids[m_i0];
+        m_id0 = m_in.ids[i0];
     if (m_in.invdepth.empty())
         return;
-    m_zeta0 = m_in.invdepth[m_i0];
+    m_zeta0 = m_in.invdepth[i0];
     // Minmod of the forward and backward differences to surface neighbours.
     auto diff = [&](int dx, int dy, float& d) {
         const int x = x0 + dx, y = y0 + dy;
@@ -101,21 +104,36 @@ GuideWeight::centre(int x0, int y0)
 
 
 void
+GuideWeight::centre_as(const GuideWeight& fine, float x0, float y0,
+                       float scale)
+{
+    m_x0    = x0;
+    m_y0    = y0;
+    m_n0    = fine.m_n0;
+    m_ids0  = fine.m_ids0;
+    m_id0   = fine.m_id0;
+    m_zeta0 = fine.m_zeta0;
+    m_gx    = fine.m_gx * scale;
+    m_gy    = fine.m_gy * scale;
+}
+
+
+void
 GuideWeight::row(int x, int y, int n, float* g) const
 {
     const size_t i = m_in.index(x, y);
     GuideCentre c;
     const bool normals = !m_in.normal.empty();
     for (int k = 0; k < 3; ++k)
-        c.n0[k] = normals ? m_in.normal[3 * m_i0 + size_t(k)] : 0.0f;
+        c.n0[k] = normals ? m_n0[k] : 0.0f;
     c.zeta0           = m_zeta0;
     c.gx              = m_gx;
     c.gy              = m_gy;
     c.depth_tolerance = m_depth_tol;
     c.normal_cut      = m_cut;
     std::memcpy(&c.id0, &m_id0, sizeof c.id0);
-    c.dx0 = float(x - m_x0);
-    c.dy  = float(y - m_y0);
+    c.dx0 = float(x) - m_x0;
+    c.dy  = float(y) - m_y0;
     // Absent guides read the zero plane: no normal anywhere gives d = 1.
     const float* zeros = m_in.zeros.data();
     const bool depth   = !m_in.invdepth.empty();
@@ -135,7 +153,7 @@ GuideWeight::row(int x, int y, int n, float* g) const
     }
     if (m_in.id_pairs > 0)
         coverage_row(&m_in.ids[size_t(2 * m_in.id_pairs) * i],
-                     &m_in.ids[size_t(2 * m_in.id_pairs) * m_i0], g, n,
+                     m_ids0, g, n,
                      m_in.id_pairs);
 }
 

@@ -37,6 +37,12 @@ public:
     /// Set the centre p0.
     void centre(int x0, int y0);
 
+    /// Take `fine`'s centre, placed at (x0, y0) in this level's pixels, one
+    /// of which spans `scale` of the fine level's (the pyramid's coarse
+    /// fits, docs/FILTER.md 5.1): the centre's own guides stay the fine
+    /// pixel's, its depth slopes are scaled to this level's pixels.
+    void centre_as(const GuideWeight& fine, float x0, float y0, float scale);
+
     /// g(q; p0) for a surface pixel q = (x, y).
     float operator()(int x, int y) const
     {
@@ -52,8 +58,9 @@ public:
 private:
     const FilterInputs& m_in;
     float m_cut, m_power, m_depth_tol;
-    int m_x0 = 0, m_y0 = 0;
-    size_t m_i0 = 0;
+    float m_x0 = 0, m_y0 = 0;  ///< the centre, in this level's pixels
+    const float* m_n0   = nullptr;  ///< its normal (null: no normal guide)
+    const float* m_ids0 = nullptr;  ///< its (id, coverage) pairs
     float m_zeta0 = 0, m_gx = 0, m_gy = 0;
     float m_id0 = 0;  ///< the centre's plain id
 };

@@ -21,10 +21,11 @@ struct FitMoments {
     double n[6] = {};     ///< sum w^2 Vs {1, u, v, uu, uv, vv}
     int count = 0;
 
-    /// Set from a cell's lane sums (in pixel offsets) for radius R; also
+    /// Set from a cell's lane sums (in pixel offsets) for radius R (in
+    /// the same pixels: half a fine radius on the pyramid's level 1); also
     /// returns the cell's sum of w^2 sigma^2. The lanes are added as a
     /// fixed tree (l + l+4, then + l+2, then + l+1), which vectorises.
-    double set(const CellLanes& c, int R)
+    double set(const CellLanes& c, double R)
     {
         using S = CellLanes;
         static_assert(kLanes == 8, "the tree below adds eight lanes");

@@ -6,6 +6,8 @@
 // checks its arguments and filters the output in tiles; each tile runs
 // the stages in src/filter/ in order:
 //   decode_filter_inputs()  pixel classes, guides, noise     (sections 2-4)
+//   build_pyramid_level()   the fit points averaged 2x2, when
+//                           large radii fit on them           (5.1)
 //   fit_centres()           every centre's window fitted and
 //                           splatted, in blocks and phases    (5, 6, 8)
 //   normalise_output()      acc / wsum, pass-through, holes   (7)
@@ -69,6 +71,9 @@ check_options(ImageBuf& dst, const FilterOptions& o)
         return bad("normal_power", o.normal_power, "needs a finite number > 0");
     if (!(o.radius_growth >= 1.0f && o.radius_growth <= 4.0f))
         return bad("radius_growth", o.radius_growth, "needs 1 <= radius_growth <= 4");
+    if (o.pyramid_radius != 0 && o.pyramid_radius < 4)
+        return bad("pyramid_radius", o.pyramid_radius,
+                   "needs 0 (off) or a radius >= 4");
     if (o.centre_stride < 1 || o.centre_stride > 64)
         return bad("centre_stride", o.centre_stride,
                    "needs 1 <= centre_stride <= 64");
@@ -113,6 +118,12 @@ FilterStats
 fit_centres(const FilterInputs& in, const FilterOptions& opt, const ROI& roi,
             const ROI& counted, int nthreads, Splats& splats)
 {
+    // Level 1 of the pyramid when some trial radius fits on it (5.1).
+    PyramidLevel pyramid;
+    const bool on_pyramid = opt.pyramid_radius > 0
+                            && opt.pyramid_radius <= opt.r_max;
+    if (on_pyramid)
+        build_pyramid_level(pyramid, in, opt, nthreads);
     const CentreBlocks blocks(opt, opt.frame, roi);
     const int nblocks = blocks.count();
     std::vector<FilterStats> block_stats(static_cast<size_t>(nblocks));
@@ -121,7 +132,8 @@ fit_centres(const FilterInputs& in, const FilterOptions& opt, const ROI& roi,
     auto run_block = [&](int b) {
         WindowFitter fitter(in, opt, roi, splats.acc, splats.wsum,
                             opt.diagnostics ? &splats.diagnostics : nullptr,
-                            splats.hat.empty() ? nullptr : &splats.hat);
+                            splats.hat.empty() ? nullptr : &splats.hat,
+                            on_pyramid ? &pyramid : nullptr);
         fit_block(blocks, b, in, opt, counted, fitter, block_stats[size_t(b)]);
         const int64_t done = ++blocks_done;
         if (opt.progress) {

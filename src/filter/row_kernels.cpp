@@ -111,6 +111,29 @@ fit_row(const float* __restrict fit_weight, const float* __restrict spatial,
     }
 }
 
+ZDENOISE_ROW_KERNEL void
+value_row(const float* __restrict fit_weight, const float* __restrict zl,
+          const float* __restrict l0, const float* __restrict l1,
+          const float* __restrict l2, float* __restrict values,
+          RangeLanes* __restrict range, int n, float mean, float value_scale)
+{
+    for (int j = 0; j < n; j += kLanes) {
+        for (int l = 0; l < kLanes; ++l) {
+            const int q    = j + l;
+            const bool use = q < n && fit_weight[q] > 0.0f;
+            values[q] = exp_neg(value_scale * std::fabs(zl[q] - mean));
+            const float lc[3] = { l0[q], l1[q], l2[q] };
+#pragma GCC unroll 3
+            for (int ch = 0; ch < 3; ++ch) {
+                float& llo = range->llo[ch][l];
+                float& lhi = range->lhi[ch][l];
+                llo = use && lc[ch] < llo ? lc[ch] : llo;
+                lhi = use && lc[ch] > lhi ? lc[ch] : lhi;
+            }
+        }
+    }
+}
+
 namespace {
 
 /// The splat weights and values of section 7 for one segment; kPower8 when

@@ -77,6 +77,16 @@ fit_row(const float* __restrict fit_weight, const float* __restrict spatial,
         CellLanes* __restrict cell, RangeLanes* __restrict range,
         const FitRow& in);
 
+/// For a window fitted on the pyramid (docs/FILTER.md 5.1), what fit_row
+/// leaves at full resolution for the splat: each point's value factor
+/// exp(-vt) into `values` and the radiance range of the points with
+/// fit_weight > 0 into `range`, for one row segment of n points.
+void
+value_row(const float* __restrict fit_weight, const float* __restrict zl,
+          const float* __restrict l0, const float* __restrict l1,
+          const float* __restrict l2, float* __restrict values,
+          RangeLanes* __restrict range, int n, float mean, float value_scale);
+
 /// A solved plane's coefficients as floats, for the splat kernel.
 struct PlaneCoeffs {
     float c[3] = {}, a[3] = {}, b[3] = {};

@@ -74,11 +74,9 @@ WindowFitter::fit(int R, int value_buffer)
     float* values = m_value[value_buffer].data();
     wf.mean   = float(m_zsum / m_zcount);
     set_spatial(R);
-    const ROI& img = m_in.image;
-    const int ya   = std::max(m_y0 - R, img.ybegin);
-    const int yb   = std::min(m_y0 + R, img.yend - 1);
-    const int xa   = std::max(m_x0 - R, img.xbegin);
-    const int xb   = std::min(m_x0 + R, img.xend - 1);
+    const ROI win = window_in_image(R);
+    const int ya = win.ybegin, yb = win.yend - 1;
+    const int xa = win.xbegin, xb = win.xend - 1;
 
     // Nine disjoint cells, each point added once: open quadrants 0-3,
     // half-axes 4 (+y), 5 (-x), 6 (-y), 7 (+x), and the centre 8. The closed
@@ -114,6 +112,15 @@ WindowFitter::fit(int R, int value_buffer)
         }
     }
     wf.range = WindowRange(range);
+    solve_cells(wf, R);
+    return wf;
+}
+
+
+void
+WindowFitter::solve_cells(WindowFit& wf, double R)
+{
+    const CellLanes* cells = m_cells.data();
     FitMoments cell[9];
     double w2s2 = 0.0;
     for (int k = 0; k < 9; ++k)
@@ -133,7 +140,121 @@ WindowFitter::fit(int R, int value_buffer)
     }
     wf.eta = wf.whole.present ? std::sqrt(w2s2) / whole.s[0]
                               : std::numeric_limits<double>::infinity();
+}
+
+
+WindowFit
+WindowFitter::fit_on_pyramid(int R, int value_buffer)
+{
+    WindowFit wf;
+    wf.radius  = R;
+    wf.values  = value_buffer;
+    wf.pyramid = true;
+    const FilterInputs& c = m_pyramid->in;
+    // Block b spans the fine pixels at offsets 2b and 2b + 1 from the
+    // frame's origin o: its centre is at offset 2b + 0.5, and the centre
+    // x0 sits at (x0 - o - 0.5) / 2 in blocks.
+    const ROI& img = m_in.image;
+    const int x0   = m_x0 - img.xbegin, y0 = m_y0 - img.ybegin;
+    const float bx0 = (float(x0) - 0.5f) * 0.5f;
+    const float by0 = (float(y0) - 0.5f) * 0.5f;
+    m_coarse_guide.centre_as(m_guide, bx0, by0, 2.0f);
+    // The blocks wholly inside the window's square and the image (so that
+    // a fit reads no pixel the exact filter would not, whatever the strip).
+    const int bxa = std::max(block_of(std::max(x0 - R, 0) + 1), c.region.xbegin);
+    const int bxb = std::min(block_of(std::min(x0 + R, img.width() - 1) - 1),
+                             c.region.xend - 1);
+    const int bya = std::max(block_of(std::max(y0 - R, 0) + 1), c.region.ybegin);
+    const int byb = std::min(block_of(std::min(y0 + R, img.height() - 1) - 1),
+                             c.region.yend - 1);
+    if (bxb < bxa || byb < bya)
+        return wf;
+    const int n = bxb - bxa + 1;
+    // Guide and fit weights, and <z> over the fit points with g > 0, as
+    // grow_to() has them at full resolution.
+    double zsum = 0.0, zcount = 0.0;
+    for (int by = bya; by <= byb; ++by) {
+        const size_t k = size_t(by - bya) * size_t(n);
+        const size_t i = c.index(bxa, by);
+        float* g       = &m_coarse_g[k];
+        float* fw      = &m_coarse_fit_weight[k];
+        m_coarse_guide.row(bxa, by, n, g);
+        for (int q = 0; q < n; ++q) {
+            const size_t iq = i + size_t(q);
+            fw[q]           = 0.0f;
+            if (!(g[q] > 0.0f))
+                continue;
+            zsum += m_pyramid->zl_sum[iq];
+            zcount += m_pyramid->fit_points[iq];
+            if (c.cls[iq] & kFitPoint)
+                fw[q] = g[q] * c.fit_prior[iq];
+        }
+    }
+    if (!(zcount > 0.0))
+        return wf;
+    wf.mean = float(zsum / zcount);
+    // e(d) = exp(-d^2/R^2) at fine offsets d = 2 (b - b0).
+    const float inv_r2 = 1.0f / float(R * R);
+    auto spatial = [&](float d_blocks) {
+        const float d = 2.0f * d_blocks;
+        return std::exp(-d * d * inv_r2);
+    };
+    for (int q = 0; q < n; ++q)
+        m_coarse_spatial[size_t(q)] = spatial(float(bxa + q) - bx0);
+    CellLanes* cells = m_cells.data();
+    std::memset(static_cast<void*>(cells), 0, 9 * sizeof(CellLanes));
+    RangeLanes range;  // not kept: the splat takes the fine points' range
+    range.clear();
+    FitRow row;
+    row.mean        = wf.mean;
+    row.value_scale = value_scale(wf.mean);
+    // No block lies on the centre's axes: each row splits into a left and
+    // a right open quadrant (cells 1, 0 above the centre, 2, 3 below).
+    const int left_end = block_of(x0 - 1);  // the last block left of x0
+    for (int by = bya; by <= byb; ++by) {
+        const size_t k = size_t(by - bya) * size_t(n);
+        row.dy         = float(by) - by0;
+        row.ey         = spatial(row.dy);
+        const bool up  = row.dy > 0.0f;
+        const int segments[2][3] = { { bxa, std::min(left_end, bxb), up ? 1 : 2 },
+                                     { std::max(left_end + 1, bxa), bxb,
+                                       up ? 0 : 3 } };
+        for (const auto& seg : segments) {
+            if (seg[1] < seg[0])
+                continue;
+            const size_t i  = c.index(seg[0], by);
+            const size_t kq = k + size_t(seg[0] - bxa);
+            row.n           = seg[1] - seg[0] + 1;
+            row.dx0         = float(seg[0]) - bx0;
+            fit_row(&m_coarse_fit_weight[kq],
+                    &m_coarse_spatial[size_t(seg[0] - bxa)], &c.zl[i],
+                    &c.zfit[0][i], &c.zfit[1][i], &c.zfit[2][i], &c.lfit[0][i],
+                    &c.lfit[1][i], &c.lfit[2][i], &c.vs[i], &c.sigma[i],
+                    &m_coarse_values[kq], &cells[seg[2]], &range, row);
+        }
+    }
+    solve_cells(wf, 0.5 * double(R));
     return wf;
+}
+
+
+void
+WindowFitter::prepare_pyramid_splat(WindowFit& w)
+{
+    const int R = w.radius;
+    grow_to(R);
+    const ROI win = window_in_image(R);
+    RangeLanes range;
+    range.clear();
+    float* values = m_value[w.values].data();
+    for (int y = win.ybegin; y < win.yend; ++y) {
+        const size_t i = m_in.index(win.xbegin, y);
+        const size_t c = cache_index(win.xbegin - m_x0, y - m_y0);
+        value_row(&m_fit_weight[c], &m_in.zl[i], &m_in.lfit[0][i],
+                  &m_in.lfit[1][i], &m_in.lfit[2][i], values + c, &range,
+                  win.width(), w.mean, value_scale(w.mean));
+    }
+    w.range = WindowRange(range);
 }
 
 
@@ -277,8 +398,15 @@ WindowFitter::process(int x0, int y0, int& radius, bool splat_window)
     StopReason reason = StopReason::Size;
     int fits = 0;
     for (int R = m_opt.r_min;; R = next_radius(R)) {
-        grow_to(R);
-        current = fit(R, fits++ & 1);
+        const int values = fits++ & 1;
+        const bool on_pyramid = m_pyramid && R >= m_opt.pyramid_radius;
+        if (on_pyramid)
+            current = fit_on_pyramid(R, values);
+        if (!on_pyramid || !current.whole.present) {
+            // The exact fit, also where level 1 has no block to fit.
+            grow_to(R);
+            current = fit(R, values);
+        }
         if (edge_fires(current)) {
             reason = StopReason::Edge;
             if (R > m_opt.r_min)
@@ -296,8 +424,11 @@ WindowFitter::process(int x0, int y0, int& radius, bool splat_window)
         previous = current;
     }
     radius = current.radius;
-    if (current.whole.present && splat_window)
+    if (current.whole.present && splat_window) {
+        if (current.pyramid)
+            prepare_pyramid_splat(current);
         splat(current, reason);
+    }
     return reason;
 }
 

@@ -7,11 +7,13 @@
 
 #pragma once
 
+#include <algorithm>
 #include <vector>
 
 #include "filter_inputs.h"
 #include "guide_weight.h"
 #include "plane_fit.h"
+#include "pyramid_level.h"
 #include "row_kernels.h"
 
 namespace zdenoise {
@@ -26,6 +28,9 @@ struct WindowFit {
     Plane whole;
     Plane quadrant[4];
     WindowRange range;  ///< of the radiance of the fit's points
+    /// Fitted on the pyramid's level 1 (docs/FILTER.md 5.1): `values` and
+    /// `range` are filled at full resolution just before the splat.
+    bool pyramid = false;
 };
 
 enum class StopReason { Quality, Size, Edge };
@@ -55,7 +60,8 @@ public:
     WindowFitter(const FilterInputs& in, const FilterOptions& opt,
                  const ROI& out, std::vector<double>& acc,
                  std::vector<double>& wsum, std::vector<double>* diagnostics,
-                 std::vector<double>* hat = nullptr)
+                 std::vector<double>* hat = nullptr,
+                 const PyramidLevel* pyramid = nullptr)
         : m_in(in)
         , m_opt(opt)
         , m_out(out)
@@ -64,6 +70,8 @@ public:
         , m_diagnostics(diagnostics)
         , m_hat(hat)
         , m_guide(in, opt)
+        , m_pyramid(pyramid)
+        , m_coarse_guide(pyramid ? pyramid->in : in, opt)
         , m_side(2 * opt.r_max + 1)
         , m_g(cache_size(), 0.0f)
         , m_fit_weight(cache_size(), 0.0f)
@@ -79,6 +87,14 @@ public:
         if (m_hat)
             for (std::vector<float>& h : m_splat_hat)
                 h.assign(size_t(m_side) + kLanes, 0.0f);
+        if (m_pyramid) {
+            // Level 1 holds at most r_max + 1 blocks of a window's side.
+            const size_t side = size_t(opt.r_max) + 1;
+            m_coarse_g.assign(side * side + kLanes, 0.0f);
+            m_coarse_fit_weight.assign(side * side + kLanes, 0.0f);
+            m_coarse_values.assign(side * side + kLanes, 0.0f);
+            m_coarse_spatial.assign(side + kLanes, 0.0f);
+        }
     }
 
     /// Fit the window of fit point (x0, y0) and splat it (unless
@@ -103,6 +119,13 @@ private:
         return size_t(dy + m_opt.r_max) * m_side + (dx + m_opt.r_max);
     }
     float& g_at(int dx, int dy) { return m_g[cache_index(dx, dy)]; }
+    /// The window of radius R around the centre, clipped to the image.
+    ROI window_in_image(int R) const
+    {
+        const ROI& img = m_in.image;
+        return ROI(std::max(m_x0 - R, img.xbegin), std::min(m_x0 + R + 1, img.xend),
+                   std::max(m_y0 - R, img.ybegin), std::min(m_y0 + R + 1, img.yend));
+    }
     /// Fill m_spatial_row for radius R: exp(-d^2/R^2) at index d + R.
     void set_spatial(int R)
     {
@@ -122,6 +145,16 @@ private:
     [[gnu::noinline]] void grow_to(int R);
     /// Fit at radius R, keeping the value factors in m_value[values].
     [[gnu::noinline]] WindowFit fit(int R, int values);
+    /// Fit at radius R on the pyramid's level 1 (docs/FILTER.md 5.1); the
+    /// splat fills m_value[values]. Absent (whole.present false) where the
+    /// window holds no block that is a fit point.
+    [[gnu::noinline]] WindowFit fit_on_pyramid(int R, int values);
+    /// The planes of a fit from its nine cells' lane sums, in window
+    /// coordinates of radius R (in the cells' pixels).
+    void solve_cells(WindowFit& wf, double R);
+    /// What a fit on the pyramid leaves to the splat: the guide and fit
+    /// weights, value factors and radiance range at full resolution.
+    [[gnu::noinline]] void prepare_pyramid_splat(WindowFit& w);
     bool edge_fires(const WindowFit& w) const;
     /// Add the splat weights of the row segment just splatted (n pixels
     /// from output index `first`) to the diagnostics' sums.
@@ -139,6 +172,12 @@ private:
     /// kHatSums per output pixel, or null: no hat diagonal.
     std::vector<double>* m_hat;
     GuideWeight m_guide;
+    const PyramidLevel* m_pyramid;  ///< null: every fit at full resolution
+    GuideWeight m_coarse_guide;     ///< on m_pyramid's level
+    /// Level 1's guide and fit weights over a window, its value factors
+    /// (not kept) and e(dx) of its columns.
+    std::vector<float> m_coarse_g, m_coarse_fit_weight, m_coarse_values,
+        m_coarse_spatial;
     int m_side;
     std::vector<float> m_g;  ///< g(q; p0) over the grown window
     /// g(q; p0) exp(-sigma(q)) for good fit points, 0 for the others: the

@@ -117,6 +117,7 @@ Filter parameters (docs/FILTER.md):
 {--stride-edges}
 {--outlier-spread}
 {--select}
+{--pyramid}
 
 Frame sequences (oiiotool's conventions) and batches:
 {--frames}
@@ -287,6 +288,10 @@ options()
         parameter({ Kind::Real, "--radius-growth", "radius-growth", FIELD(job.filter.radius_growth), "X",
           "Radius tried after R: max(R+1, R*X) (2: radii 2, 4, 8,\n"
           "16; 1 = the method's R+1, as --preset spec)" }),
+        parameter({ Kind::Whole, "--pyramid", "pyramid", FIELD(job.filter.pyramid_radius), "R",
+          "Fit trial radii >= R on the fit points averaged 2x2\n"
+          "(a quarter of the points), splat at full resolution\n"
+          "(0 = the exact filter; docs/FILTER.md 5.1) (0)" }),
         parameter({ Kind::Whole, "--select", "select", FIELD(job.filter.select), "0|1",
           "1: each pixel takes today's filter or one of two\n"
           "feature regressions, by its estimated error (SURE, or\n"
