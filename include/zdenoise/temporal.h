@@ -1,0 +1,83 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Temporal denoising (docs/TEMPORAL.md): the neighbouring frames of an
+// animation as extra evidence for frame t. Their demodulated light is
+// reprojected into frame t through motion vectors and averaged with frame
+// t's wherever the guides say that the same surface is seen, before the
+// filter runs; disoccluded and moving parts keep frame t's light alone.
+// Conventions as in zdenoise.h (ImageBufAlgo style, bit-identical for
+// every thread count, any ROI computed exactly).
+
+#pragma once
+
+#include <vector>
+
+#include <zdenoise/zdenoise.h>
+
+namespace zdenoise {
+
+/// When a neighbour's pixel counts as the same surface as frame t's.
+struct TemporalOptions {
+    /// Depths (Guides::depth) may differ by this fraction of frame t's.
+    float depth_tolerance = 0.05f;
+    /// Normals (Guides::normal) must have at least this cosine.
+    float normal_cut = 0.9f;
+    /// As FilterOptions::albedo_eps: light = radiance / (albedo + eps)
+    /// where the albedo is demodulated (docs/FILTER.md section 1).
+    float albedo_eps = 1e-3f;
+};
+
+/// One frame of the sequence as temporal_combine() reads it. Every image
+/// is of that frame; they share its data window.
+struct TemporalFrame {
+    const ImageBuf* radiance = nullptr;  ///< R, G, B (then alpha, if any)
+    const ImageBuf* albedo   = nullptr;  ///< R, G, B
+    /// normal, depth and object_id are compared with frame t's (each only
+    /// when both frames have it); variance, half_a and half_b are combined
+    /// as the radiance is, when frame t has them.
+    Guides guides;
+    /// For a neighbour: where each pixel of frame t shows in this frame,
+    /// as an offset in pixels (2 channels: x to the right, y down the
+    /// rows), over frame t's data window; non-finite where it shows
+    /// nowhere. Null: the same place (a static camera and scene). Ignored
+    /// for frame t itself.
+    const ImageBuf* flow = nullptr;
+};
+
+/// What temporal_combine() makes of frame t.
+struct TemporalCombined {
+    ImageBuf radiance;  ///< frame t's channels, R, G, B combined
+    ImageBuf variance;  ///< combined, when frame t has a variance guide
+    ImageBuf half_a, half_b;  ///< combined, when frame t has halves
+    ImageBuf frames;    ///< 1 channel: the frames averaged at each pixel
+};
+
+/// Average frame t's light with its neighbours': at each pixel p of roi,
+/// for each neighbour whose pixel q = p + flow(p) (nearest pixel, so that
+/// pixel noise stays independent) lies in its data window and shows the
+/// same surface (both surface or both not; depth within depth_tolerance;
+/// normals' cosine >= normal_cut; the same object id, or the same primary
+/// Cryptomatte id), the light z = L / (A + eps) of each demodulated channel
+/// is averaged, and the result is remodulated by frame t's albedo. Channels
+/// that are not demodulated in both frames keep frame t's radiance.
+/// Variance guides combine as the variance of that mean; halves combine
+/// as the radiance. dst.radiance carries frame t's other channels. Errors
+/// (a neighbour's image missing, of another size or without 2 flow
+/// channels) in dst.radiance.geterror().
+ZDENOISE_API bool temporal_combine(TemporalCombined& dst,
+                                   const TemporalFrame& frame,
+                                   const std::vector<TemporalFrame>& neighbours,
+                                   const TemporalOptions& options = {},
+                                   ROI roi = {}, int nthreads = 0);
+
+/// Chain two flows: where frame t's pixels show in frame t+2, from where
+/// they show in frame t+1 (`to_next`, over frame t) and where frame t+1's
+/// pixels show in t+2 (`next_to_after`, over frame t+1): dst(p) = a(p) +
+/// b(p + a(p)) at the nearest pixel; non-finite where p + a(p) leaves the
+/// frame or either is non-finite.
+ZDENOISE_API bool chain_flow(ImageBuf& dst, const ImageBuf& to_next,
+                             const ImageBuf& next_to_after, ROI roi = {},
+                             int nthreads = 0);
+
+}  // namespace zdenoise

@@ -1,0 +1,395 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// temporal_combine() and chain_flow(): the neighbouring frames' light
+// reprojected into frame t (docs/TEMPORAL.md). Stages:
+//   read_frame()      the planes a frame is compared and combined by
+//   same_surface()    do frame t's pixel and a neighbour's show one surface
+//   combine_pixel()   the mean light of the frames that do, remodulated
+
+#include <zdenoise/temporal.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include <OpenImageIO/imagebufalgo_util.h>
+
+#include "filter/filter_inputs.h"
+#include "internal.h"
+
+namespace zdenoise {
+
+using namespace OIIO;
+
+namespace {
+
+constexpr const char* kOp = "temporal_combine";
+
+/// The planes of one frame over `window` (row-major), float.
+struct FramePlanes {
+    ROI window;
+    std::vector<float> rgb, albedo, alpha, normal, depth, variance, half_a,
+        half_b;
+    int variance_channels = 0;
+    std::vector<uint32_t> id;  ///< plain id or primary Cryptomatte id bits
+    bool has_id = false;
+
+    bool inside(int x, int y) const
+    {
+        return x >= window.xbegin && x < window.xend && y >= window.ybegin
+               && y < window.yend;
+    }
+    size_t index(int x, int y) const
+    {
+        return size_t(y - window.ybegin) * size_t(window.width())
+               + size_t(x - window.xbegin);
+    }
+    /// Alpha > 0 (when given) and a valid depth (when given), as the
+    /// filter's pixel classes (docs/FILTER.md section 2).
+    bool surface(size_t i) const
+    {
+        if (!alpha.empty() && !(alpha[i] > 0.0f))
+            return false;
+        if (!depth.empty()
+            && !(std::isfinite(depth[i]) && depth[i] > 0.0f && depth[i] < 1e9f))
+            return false;
+        return true;
+    }
+};
+
+/// The id a pixel is compared by: a plain id's bits, or the id of the
+/// largest coverage of (id, coverage) pairs (the first on ties).
+std::vector<uint32_t>
+primary_ids(const ImageBuf& ids, const ROI& window)
+{
+    const int nch            = ids.nchannels();
+    const std::vector<float> v = detail::read_channels(ids, window, 0, nch);
+    std::vector<uint32_t> out(window.npixels());
+    for (size_t i = 0; i < out.size(); ++i) {
+        const float* p = &v[i * size_t(nch)];
+        int best       = 0;
+        if (nch > 1)
+            for (int k = 1; 2 * k + 1 < nch; ++k)
+                if (p[2 * k + 1] > p[2 * best + 1])
+                    best = k;
+        std::memcpy(&out[i], &p[2 * best], sizeof(uint32_t));
+    }
+    return out;
+}
+
+FramePlanes
+read_frame(const TemporalFrame& f, const ROI& window, bool combine_guides)
+{
+    FramePlanes p;
+    p.window = window;
+    p.rgb    = detail::read_channels(*f.radiance, window, 0, 3);
+    p.albedo = detail::read_channels(*f.albedo, window, 0, 3);
+    if (f.radiance->nchannels() > 3)
+        p.alpha = detail::read_channels(*f.radiance, window, 3, 4);
+    const Guides& g = f.guides;
+    if (g.normal)
+        p.normal = detail::read_channels(*g.normal, window, 0, 3);
+    if (g.depth)
+        p.depth = detail::read_channels(*g.depth, window, 0, 1);
+    if (g.object_id) {
+        p.id     = primary_ids(*g.object_id, window);
+        p.has_id = true;
+    }
+    if (!combine_guides)
+        return p;
+    if (g.variance) {
+        p.variance_channels = g.variance->nchannels() >= 3 ? 3 : 1;
+        p.variance = detail::read_channels(*g.variance, window, 0,
+                                           p.variance_channels);
+    }
+    if (g.half_a && g.half_b) {
+        p.half_a = detail::read_channels(*g.half_a, window, 0, 3);
+        p.half_b = detail::read_channels(*g.half_b, window, 0, 3);
+    }
+    return p;
+}
+
+/// Does pixel j of neighbour n show the surface pixel i of frame t shows?
+bool
+same_surface(const FramePlanes& t, size_t i, const FramePlanes& n, size_t j,
+             const TemporalOptions& opt)
+{
+    if (t.surface(i) != n.surface(j))
+        return false;
+    if (!t.depth.empty() && !n.depth.empty() && t.surface(i)
+        && !(std::fabs(n.depth[j] - t.depth[i])
+             <= opt.depth_tolerance * t.depth[i]))
+        return false;
+    if (!t.normal.empty() && !n.normal.empty()) {
+        const float* a = &t.normal[3 * i];
+        const float* b = &n.normal[3 * j];
+        const float la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+        const float lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+        const bool na = !(la >= 1e-6f), nb = !(lb >= 1e-6f);
+        if (na != nb)
+            return false;
+        if (!na
+            && !((a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) >= opt.normal_cut * la * lb))
+            return false;
+    }
+    if (t.has_id && n.has_id && t.id[i] != n.id[j])
+        return false;
+    return true;
+}
+
+/// The nearest pixel of `p + flow` (pixel centres at +0.5), or false.
+bool
+reproject(int x, int y, const float* flow, int& qx, int& qy)
+{
+    if (!flow)
+        return qx = x, qy = y, true;
+    const float fx = flow[0], fy = flow[1];
+    if (!std::isfinite(fx) || !std::isfinite(fy) || std::fabs(fx) > 1e8f
+        || std::fabs(fy) > 1e8f)
+        return false;
+    qx = int(std::floor(float(x) + 0.5f + fx));
+    qy = int(std::floor(float(y) + 0.5f + fy));
+    return true;
+}
+
+bool
+check_frame_images(ImageBuf& dst, const TemporalFrame& f, const ROI& window,
+                   const std::string& which)
+{
+    if (!f.radiance || !f.albedo) {
+        dst.errorfmt("{}: {} has no {}", kOp, which,
+                     f.radiance ? "albedo" : "radiance");
+        return false;
+    }
+    auto check = [&](const ImageBuf* img, const char* what, int nch) {
+        if (!img)
+            return true;
+        if (img->roi().xbegin != window.xbegin || img->roi().xend != window.xend
+            || img->roi().ybegin != window.ybegin
+            || img->roi().yend != window.yend) {
+            dst.errorfmt("{}: {}'s {} covers another data window than its "
+                         "radiance",
+                         kOp, which, what);
+            return false;
+        }
+        if (img->nchannels() < nch) {
+            dst.errorfmt("{}: {}'s {} has {} channels, needs {}", kOp, which,
+                         what, img->nchannels(), nch);
+            return false;
+        }
+        return true;
+    };
+    const Guides& g = f.guides;
+    return check(f.radiance, "radiance", 3) && check(f.albedo, "albedo", 3)
+           && check(g.normal, "normal", 3) && check(g.depth, "depth", 1)
+           && check(g.object_id, "object id", 1)
+           && check(g.variance, "variance", 1) && check(g.half_a, "half A", 3)
+           && check(g.half_b, "half B", 3);
+}
+
+}  // namespace
+
+
+bool
+temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
+                 const std::vector<TemporalFrame>& neighbours,
+                 const TemporalOptions& opt, ROI roi, int nthreads)
+{
+    if (!frame.radiance || !frame.albedo) {
+        dst.radiance.errorfmt("{}: frame t has no {}", kOp,
+                              frame.radiance ? "albedo" : "radiance");
+        return false;
+    }
+    const ROI full = frame.radiance->roi();
+    if (!roi.defined())
+        roi = full;
+    roi = roi_intersection(roi, full);
+    roi.chbegin = 0;
+    roi.chend   = frame.radiance->nchannels();
+    if (!check_frame_images(dst.radiance, frame, full, "frame t"))
+        return false;
+    for (size_t k = 0; k < neighbours.size(); ++k) {
+        const TemporalFrame& n = neighbours[k];
+        const std::string which = "neighbour " + std::to_string(k);
+        if (!check_frame_images(dst.radiance, n, n.radiance ? n.radiance->roi() : full,
+                                which))
+            return false;
+        const ROI fw = n.flow ? n.flow->roi() : ROI();
+        if (n.flow
+            && (fw.nchannels() < 2 || fw.xbegin > roi.xbegin
+                || fw.xend < roi.xend || fw.ybegin > roi.ybegin
+                || fw.yend < roi.yend)) {
+            dst.radiance.errorfmt("{}: {}'s flow needs 2 channels over frame "
+                                  "t's pixels",
+                                  kOp, which);
+            return false;
+        }
+    }
+    const FramePlanes t = read_frame(frame, roi, true);
+    std::vector<FramePlanes> ns;
+    std::vector<std::vector<float>> flows;
+    for (const TemporalFrame& n : neighbours) {
+        ns.push_back(read_frame(n, n.radiance->roi(), !t.variance.empty()
+                                                          || !t.half_a.empty()));
+        flows.push_back(n.flow ? detail::read_channels(*n.flow, roi, 0, 2)
+                               : std::vector<float>());
+    }
+    const bool with_variance = !t.variance.empty();
+    const bool with_halves   = !t.half_a.empty();
+    for (const FramePlanes& n : ns)
+        if ((with_variance && n.variance.empty())
+            || (with_halves && n.half_a.empty())) {
+            dst.radiance.errorfmt("{}: frame t has {}, a neighbour does not",
+                                  kOp, with_variance ? "a variance" : "halves");
+            return false;
+        }
+
+    ImageSpec spec(roi.width(), roi.height(), roi.chend, TypeDesc::FLOAT);
+    spec.x = roi.xbegin;
+    spec.y = roi.ybegin;
+    dst.radiance.reset(spec);
+    ImageBufAlgo::copy(dst.radiance, *frame.radiance, TypeUnknown, roi, nthreads);
+    auto plane = [&](ImageBuf& img, int nch) {
+        ImageSpec s(roi.width(), roi.height(), nch, TypeDesc::FLOAT);
+        s.x = roi.xbegin;
+        s.y = roi.ybegin;
+        img.reset(s, InitializePixels::Yes);
+    };
+    plane(dst.frames, 1);
+    if (with_variance)
+        plane(dst.variance, t.variance_channels);
+    if (with_halves) {
+        plane(dst.half_a, 3);
+        plane(dst.half_b, 3);
+    }
+
+    const float eps = opt.albedo_eps;
+    auto demod = [eps](float a) { return detail::albedo_demodulated(a, eps); };
+    const int width = roi.width();
+    detail::for_rows(roi, nthreads, [&](int y) {
+        float var[3] = {}, ha[3] = {}, hb[3] = {};
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const size_t i = t.index(x, y);
+            const size_t o = size_t(y - roi.ybegin) * size_t(width)
+                             + size_t(x - roi.xbegin);
+            // Per channel: the sum of light and of its variance, and the
+            // frames counted.
+            double zsum[3] = {}, vsum[3] = {}, asum[3] = {}, bsum[3] = {};
+            int count[3] = {};
+            int frames = 1;
+            auto add = [&](const FramePlanes& f, size_t j, int c) {
+                const float scale = 1.0f / (f.albedo[3 * j + size_t(c)] + eps);
+                zsum[c] += double(f.rgb[3 * j + size_t(c)]) * scale;
+                if (with_variance) {
+                    const int vc = f.variance_channels == 3 ? c : 0;
+                    vsum[c] += double(f.variance[size_t(f.variance_channels) * j
+                                                 + size_t(vc)])
+                               * scale * scale;
+                }
+                if (with_halves) {
+                    asum[c] += double(f.half_a[3 * j + size_t(c)]) * scale;
+                    bsum[c] += double(f.half_b[3 * j + size_t(c)]) * scale;
+                }
+                ++count[c];
+            };
+            for (int c = 0; c < 3; ++c)
+                if (demod(t.albedo[3 * i + size_t(c)]))
+                    add(t, i, c);
+            for (size_t k = 0; k < ns.size(); ++k) {
+                const FramePlanes& n = ns[k];
+                int qx = 0, qy = 0;
+                const float* f = flows[k].empty() ? nullptr : &flows[k][2 * o];
+                if (!reproject(x, y, f, qx, qy) || !n.inside(qx, qy))
+                    continue;
+                const size_t j = n.index(qx, qy);
+                if (!same_surface(t, i, n, j, opt))
+                    continue;
+                bool used = false;
+                for (int c = 0; c < 3; ++c)
+                    if (demod(t.albedo[3 * i + size_t(c)])
+                        && demod(n.albedo[3 * j + size_t(c)])
+                        && std::isfinite(n.rgb[3 * j + size_t(c)])) {
+                        add(n, j, c);
+                        used = true;
+                    }
+                frames += used;
+            }
+            float* out_rgb = static_cast<float*>(
+                dst.radiance.pixeladdr(x, y));
+            for (int c = 0; c < 3; ++c) {
+                if (!count[c])
+                    continue;  // not demodulated: frame t's radiance
+                const double a = double(t.albedo[3 * i + size_t(c)]) + eps;
+                out_rgb[c] = float(zsum[c] / count[c] * a);
+                if (with_variance)
+                    var[c] = float(vsum[c] / (double(count[c]) * count[c]) * a * a);
+                if (with_halves) {
+                    ha[c] = float(asum[c] / count[c] * a);
+                    hb[c] = float(bsum[c] / count[c] * a);
+                }
+            }
+            *static_cast<float*>(dst.frames.pixeladdr(x, y)) = float(frames);
+            if (with_variance) {
+                float* v = static_cast<float*>(dst.variance.pixeladdr(x, y));
+                for (int c = 0; c < t.variance_channels; ++c) {
+                    const int src = c;
+                    v[c] = count[src] ? var[src]
+                                      : t.variance[size_t(t.variance_channels) * i
+                                                   + size_t(c)];
+                }
+            }
+            if (with_halves) {
+                float* a = static_cast<float*>(dst.half_a.pixeladdr(x, y));
+                float* b = static_cast<float*>(dst.half_b.pixeladdr(x, y));
+                for (int c = 0; c < 3; ++c) {
+                    a[c] = count[c] ? ha[c] : t.half_a[3 * i + size_t(c)];
+                    b[c] = count[c] ? hb[c] : t.half_b[3 * i + size_t(c)];
+                }
+            }
+        }
+    });
+    return true;
+}
+
+
+bool
+chain_flow(ImageBuf& dst, const ImageBuf& to_next,
+           const ImageBuf& next_to_after, ROI roi, int nthreads)
+{
+    if (to_next.nchannels() < 2 || next_to_after.nchannels() < 2) {
+        dst.errorfmt("chain_flow: a flow needs 2 channels");
+        return false;
+    }
+    if (!roi.defined())
+        roi = to_next.roi();
+    roi.chbegin = 0;
+    roi.chend   = 2;
+    const ROI next = next_to_after.roi();
+    const std::vector<float> a = detail::read_channels(to_next, roi, 0, 2);
+    const std::vector<float> b = detail::read_channels(next_to_after, next, 0, 2);
+    ImageSpec spec(roi.width(), roi.height(), 2, TypeDesc::FLOAT);
+    spec.x = roi.xbegin;
+    spec.y = roi.ybegin;
+    dst.reset(spec);
+    detail::for_rows(roi, nthreads, [&](int y) {
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const size_t o = size_t(y - roi.ybegin) * size_t(roi.width())
+                             + size_t(x - roi.xbegin);
+            float* d = static_cast<float*>(dst.pixeladdr(x, y));
+            d[0] = d[1] = std::numeric_limits<float>::quiet_NaN();
+            int qx = 0, qy = 0;
+            if (!reproject(x, y, &a[2 * o], qx, qy)
+                || !(qx >= next.xbegin && qx < next.xend && qy >= next.ybegin
+                     && qy < next.yend))
+                continue;
+            const size_t j = size_t(qy - next.ybegin) * size_t(next.width())
+                             + size_t(qx - next.xbegin);
+            d[0] = a[2 * o] + b[2 * j];
+            d[1] = a[2 * o + 1] + b[2 * j + 1];
+        }
+    });
+    return true;
+}
+
+}  // namespace zdenoise
