@@ -319,3 +319,44 @@ TEST_F(Sequence, OnATerminalProgressIsOneUpdatingLine)
     EXPECT_EQ(std::count(between.begin(), between.end(), '\n'), 1)
         << "one line break, before the summary:\n" << between;
 }
+
+
+// --temporal K (docs/TEMPORAL.md): a static sequence denoised with its
+// neighbours; a neighbour within the sequence whose file is missing fails
+// its frames naming it (no silent fallback to the frame alone); no motion
+// vectors without --static-camera, or a single image, are refused.
+TEST_F(Sequence, TemporalUsesTheNeighboursAndNamesAMissingOne)
+{
+    write_frames({ 1, 2, 3, 5 });
+    RunResult r = zdenoise(sequence_args() + " --frames 1-3 --temporal 1 "
+                                             "--static-camera -v");
+    EXPECT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("temporal  frames -1,+1 around this one"), std::string::npos)
+        << r.out;
+    EXPECT_NE(r.out.find("temporal  frames +1 around this one"), std::string::npos)
+        << "the first frame uses the neighbour it has\n" << r.out;
+    // The output is not the frame alone's.
+    RunResult alone = zdenoise("--in " + path("noisy.0002.exr") + " --albedo "
+                               + path("albedo.0002.exr") + " -o " + path("alone.exr"));
+    ASSERT_EQ(alone.status, 0) << alone.err;
+    EXPECT_FALSE(same_pixels(path("out.0002.exr"), path("alone.exr")));
+
+    r = zdenoise(sequence_args() + " --frames 3-5 --temporal 1 --static-camera");
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_NE(r.err.find("frame 3: --temporal: neighbour frame +1: cannot read '"
+                         + path("noisy.0004.exr") + "': no such file"),
+              std::string::npos)
+        << r.err;
+    EXPECT_FALSE(Filesystem::exists(path("out.0005.exr")))
+        << "frame 5's neighbour 4 is missing too: it fails\n" << r.err;
+
+    r = zdenoise(sequence_args() + " --frames 1-3 --temporal 1");
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find("has no motion vectors"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("--static-camera"), std::string::npos) << r.err;
+
+    r = zdenoise("--in " + path("noisy.0001.exr") + " --albedo " + path("albedo.0001.exr")
+                 + " -o " + path("single.exr") + " --temporal 1 --static-camera");
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("--temporal needs a frame sequence"), std::string::npos) << r.err;
+}

@@ -263,6 +263,10 @@ run(int argc, char* argv[])
         fail("--write-recipe writes the recipe of one image: no frame "
              "patterns, --frames or batch options",
              kExitUsage);
+    if (!a.recipe.empty() && a.job.temporal > 0)
+        fail("--temporal is not a recipe option: a recipe is one frame "
+             "(docs/TEMPORAL.md)",
+             kExitUsage);
     if (!a.recipe.empty()) {
         if (!job::write_recipe(a.job, a.preset, a.recipe, err))
             fail(err);
@@ -278,6 +282,10 @@ run(int argc, char* argv[])
             fail(err, status);
         return 0;
     }
+    if (a.job.temporal > 0)
+        fail("--temporal needs a frame sequence, e.g. --in shot.#.exr "
+             "--frames 1001-1100 -o clean.#.exr",
+             kExitUsage);
     Timer total;
 
     // Never overwrite an input unless asked.

@@ -203,6 +203,23 @@ write_report(const std::string& path, const job::Job& job,
     return job::write_text_atomically(path, text, error);
 }
 
+/// Frame `frame`'s job; with --temporal K, with the jobs of frames
+/// frame-K .. frame+K that lie within the sequence's first and last frames
+/// (the first and last frames use the neighbours they have; a neighbour
+/// within them whose file is missing fails the frame, naming it).
+job::Job
+frame_job(const job::Job& job, int frame, const std::vector<int>& frames)
+{
+    job::Job j = job::job_for_frame(job, frame);
+    const auto [first, last] = std::minmax_element(frames.begin(), frames.end());
+    for (int k = -job.temporal; k <= job.temporal; ++k)
+        if (k != 0 && frame + k >= *first && frame + k <= *last) {
+            j.neighbours.push_back(job::job_for_frame(job, frame + k));
+            j.neighbour_offsets.push_back(k);
+        }
+    return j;
+}
+
 }  // namespace
 
 
@@ -314,7 +331,7 @@ run_batch(const job::Job& job, const std::string& output,
                           finished ? work_seconds / double(finished)
                                          * double(left)
                                    : 0.0);
-        run_frame(sequence ? job::job_for_frame(job, r.frame) : job, r, o);
+        run_frame(sequence ? frame_job(job, r.frame, frames) : job, r, o);
         work_seconds += r.seconds;
         if (r.status == FrameRecord::Status::Failed) {
             ++failed;

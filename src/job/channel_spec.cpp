@@ -47,6 +47,10 @@ role_table()
           false, "1 or 3" },
         { Role::LayerRadiance, "layer radiance",
           { { "R", "G", "B" }, { "r", "g", "b" } }, { 3 }, false, "3" },
+        { Role::Motion, "motion vectors",
+          { { "X", "Y", "Z", "W" }, { "x", "y", "z", "w" }, { "X", "Y" },
+            { "x", "y" }, { "R", "G" } },
+          { 2, 4 }, false, "2 or 4" },
     };
     return table;
 }

@@ -23,7 +23,8 @@ enum class Role {
     Depth,
     ObjectId,
     Variance,
-    LayerRadiance  ///< a layer's or the residual's R,G,B (no alpha)
+    LayerRadiance,  ///< a layer's or the residual's R,G,B (no alpha)
+    Motion          ///< motion vectors (docs/TEMPORAL.md): 2 or 4 channels
 };
 
 const char*
@@ -39,7 +40,7 @@ role_name(Role role);
 ///                     component names), matched as a suffix after a '.'.
 /// Radiance takes 3 channels plus an optional alpha (A) after them; albedo,
 /// layer radiance and normal 3; depth 1; variance 1 or 3; object id 1 or an even number
-/// ((id, coverage) pairs).
+/// ((id, coverage) pairs); motion vectors 2 or 4.
 /// On failure returns false with a message naming the channels missing.
 bool
 select_channels(const std::vector<std::string>& names, const std::string& selection,

@@ -196,7 +196,7 @@ input_members()
 {
     return { &Job::in,    &Job::albedo,   &Job::normal, &Job::depth,
              &Job::id,    &Job::variance, &Job::half_a, &Job::half_b,
-             &Job::aux };
+             &Job::aux,   &Job::motion };
 }
 
 }  // namespace

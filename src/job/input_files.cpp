@@ -249,7 +249,9 @@ select_roles(InputFiles& files, const Job& j, bool layered)
                      { &s.id, &j.id, j.no_id },
                      { &s.variance, &j.variance, false },
                      { &s.half_a, &j.half_a, false },
-                     { &s.half_b, &j.half_b, false } };
+                     { &s.half_b, &j.half_b, false },
+                     { &s.motion, &j.motion,
+                       j.temporal == 0 || j.static_camera } };
     for (const auto& o : optional)
         if (o.arg->given && !o.disabled) {
             o.role->selection = select_role(files, *o.arg, o.role->role,

@@ -107,12 +107,14 @@ struct RoleSelections {
     /// The auxiliary image's albedo, when it remodulates what the render's
     /// own albedo demodulated (beauty mode).
     OptionalRole remodulation { "aux albedo", Role::Albedo, false, {} };
+    /// Motion vectors, with --temporal (docs/TEMPORAL.md).
+    OptionalRole motion { "motion", Role::Motion, false, {} };
 
     /// The optional roles, in the order -v lists them.
     std::vector<const OptionalRole*> optional() const
     {
         return { &normal, &depth, &id, &variance, &half_a, &half_b,
-                 &remodulation };
+                 &remodulation, &motion };
     }
 };
 

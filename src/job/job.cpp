@@ -11,9 +11,12 @@
 
 #include "job.h"
 
+#include <zdenoise/temporal.h>
+
 #include <algorithm>
 #include <cstdlib>
 
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
@@ -24,6 +27,7 @@
 #include "layer_conventions.h"
 #include "layers_plan.h"
 #include "memory_plan.h"
+#include "neighbour_frames.h"
 #include "options.h"
 #include "role_defaults.h"
 #include "output.h"
@@ -90,7 +94,7 @@ struct Plan {
 /// The images of one strip's roles (those unused stay empty).
 struct RoleImages {
     ImageBuf radiance, albedo, normal, depth, id, variance, half_a, half_b,
-        remodulation;
+        remodulation, motion;
 };
 
 
@@ -170,6 +174,25 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
                     j.in.path, p.noisy.width(), p.noisy.height(), pixels,
                     j.max_pixels));
     p.roles = select_roles(files, j, p.layered);
+    if (j.temporal > 0) {
+        if (p.layered)
+            fail("--temporal works in --mode beauty (the layers' light is "
+                 "not combined across frames yet; docs/TEMPORAL.md)");
+        if (!j.static_camera && !p.roles.motion.used)
+            fail(format("--temporal {}: '{}' has no motion vectors (a Cycles "
+                        "Vector pass, Arnold's motionvector); give --motion "
+                        "FILE[:ch=X,Y] or, when nothing moves, "
+                        "--static-camera",
+                        j.temporal, j.in.path));
+        std::string offsets;
+        for (int o : j.neighbour_offsets)
+            offsets += format("{}{:+d}", offsets.empty() ? "" : ",", o);
+        result.log.push_back(format(
+            "temporal  frames {} around this one, {}", 
+            offsets.empty() ? std::string("none") : offsets,
+            j.static_camera ? "a static camera (no motion vectors)"
+                            : "reprojected through the motion vectors"));
+    }
     if (!p.layered && !remodulation.empty()) {
         p.roles.remodulation.selection
             = select_role(files, { j.aux.path, remodulation, true },
@@ -290,6 +313,19 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
     p.output.sink = &sink;
     p.output.set_row_types(sink.float_rows());
     add_output_costs(cost, sink, spec, p.output.pixel_bytes);
+    if (j.temporal > 0) {
+        // The neighbours are read whole (their pixels move across strips):
+        // the frame is one strip, and each neighbour's roles (as floats),
+        // its flow and the combined images are counted.
+        j.tile_rows = p.noisy.height();
+        double role_floats = double(p.roles.radiance.indices.size()
+                                    + p.roles.albedo.indices.size());
+        for (const OptionalRole* o : p.roles.optional())
+            if (o->used)
+                role_floats += double(o->selection.indices.size());
+        cost.held_pixel += double(j.neighbours.size()) * (4.0 * role_floats + 16.0)
+                           + 4.0 * role_floats;
+    }
     plan_strips(j, in, cost, result);
     p.around = cost.around;
     result.log.push_back(
@@ -308,6 +344,130 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
     std::string err;
     if (!sink.begin(spec, result.channel_formats, err))
         throw SinkFailure { err };
+}
+
+
+/// Convert a role image of `arg`'s file between colour spaces (when it is
+/// there and the job manages colour).
+void
+convert_role(const Plan& p, ImageBuf& image, const std::string& from,
+             const std::string& to, const InputArg& arg)
+{
+    std::string err;
+    if (p.managed && image.initialized()
+        && !p.config.convert_rgb(image, from, to, err))
+        fail(format("'{}': {}", arg.path, one_line(err)));
+}
+
+
+/// --temporal (docs/TEMPORAL.md): frame t's radiance (and variance or
+/// halves) averaged with its neighbours' light where they show the same
+/// surface, before the filter. The neighbours are read whole, converted
+/// and prefiltered as frame t; each one's flow chains the motion vectors
+/// of the frames between.
+void
+combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
+                   RoleImages& img, JobResult& result)
+{
+    const size_t n = j.neighbours.size();
+    std::vector<FrameRoles> frames(n);
+    for (size_t k = 0; k < n; ++k) {
+        const Job& nj = j.neighbours[k];
+        try {
+            frames[k] = read_neighbour_roles(j, nj, p.roles, files, p.noisy,
+                                             j.threads);
+        } catch (const Failure& f) {
+            fail(format("--temporal: neighbour frame {:+d}: {}",
+                        j.neighbour_offsets[k], f.message));
+        }
+        FrameRoles& f = frames[k];
+        convert_role(p, f.radiance, p.spaces.input, p.spaces.working, nj.in);
+        convert_role(p, f.albedo, p.spaces.albedo, p.spaces.working, nj.albedo);
+        convert_role(p, f.half_a, p.spaces.input, p.spaces.working, nj.half_a);
+        convert_role(p, f.half_b, p.spaces.input, p.spaces.working, nj.half_b);
+        if (p.albedo_samples) {
+            ImageBuf clean;
+            if (!prefilter_albedo(clean, f.albedo, p.albedo_samples, {},
+                                  j.threads))
+                fail(format("'{}': {}", nj.albedo.path,
+                            one_line(clean.geterror())));
+            f.albedo = std::move(clean);
+        }
+    }
+    // flows[k]: where frame t's pixels show in neighbour k; chained one
+    // frame at a time, each step by the motion vectors of the frame it
+    // leaves.
+    std::vector<ImageBuf> flows(n);
+    if (!j.static_camera) {
+        auto at_offset = [&](int o) -> const ImageBuf& {
+            for (size_t k = 0; k < n; ++k)
+                if (j.neighbour_offsets[k] == o)
+                    return frames[k].motion;
+            return img.motion;  // o == 0
+        };
+        for (size_t k = 0; k < n; ++k) {
+            const int o = j.neighbour_offsets[k], dir = o > 0 ? 1 : -1;
+            ImageBuf flow;
+            for (int step = 0; step != o; step += dir) {
+                ImageBuf to_previous, to_next;
+                vector_flows(at_offset(step), to_previous, to_next, j.threads);
+                ImageBuf& next = dir > 0 ? to_next : to_previous;
+                if (!flow.initialized()) {
+                    flow = std::move(next);
+                    continue;
+                }
+                ImageBuf chained;
+                if (!chain_flow(chained, flow, next, {}, j.threads))
+                    fail(format("--temporal: {}", one_line(chained.geterror())));
+                flow = std::move(chained);
+            }
+            flows[k] = std::move(flow);
+        }
+    }
+    auto as_frame = [&](const ImageBuf& radiance, const ImageBuf& albedo,
+                        const ImageBuf& normal, const ImageBuf& depth,
+                        const ImageBuf& id, const ImageBuf& variance,
+                        const ImageBuf& half_a, const ImageBuf& half_b) {
+        auto given = [](const ImageBuf& b) {
+            return b.initialized() ? &b : nullptr;
+        };
+        TemporalFrame f;
+        f.radiance         = &radiance;
+        f.albedo           = &albedo;
+        f.guides.normal    = given(normal);
+        f.guides.depth     = given(depth);
+        f.guides.object_id = given(id);
+        f.guides.variance  = given(variance);
+        f.guides.half_a    = given(half_a);
+        f.guides.half_b    = given(half_b);
+        return f;
+    };
+    const TemporalFrame t = as_frame(img.radiance, img.albedo, img.normal,
+                                     img.depth, img.id, img.variance,
+                                     img.half_a, img.half_b);
+    std::vector<TemporalFrame> neighbours;
+    for (size_t k = 0; k < n; ++k) {
+        const FrameRoles& f = frames[k];
+        neighbours.push_back(as_frame(f.radiance, f.albedo, f.normal, f.depth,
+                                      f.id, f.variance, f.half_a, f.half_b));
+        neighbours.back().flow = j.static_camera ? nullptr : &flows[k];
+    }
+    TemporalOptions options;
+    options.albedo_eps = j.filter.albedo_eps;
+    TemporalCombined c;
+    if (!temporal_combine(c, t, neighbours, options, {}, j.threads))
+        fail(format("--temporal: {}", one_line(c.radiance.geterror())));
+    img.radiance = std::move(c.radiance);
+    if (img.variance.initialized())
+        img.variance = std::move(c.variance);
+    if (img.half_a.initialized()) {
+        img.half_a = std::move(c.half_a);
+        img.half_b = std::move(c.half_b);
+    }
+    const auto mean = ImageBufAlgo::computePixelStats(c.frames);
+    result.log.push_back(format("temporal  {:.2f} frames a pixel on average "
+                                "(of {})",
+                                mean.avg.empty() ? 1.0 : mean.avg[0], n + 1));
 }
 
 
@@ -346,6 +506,7 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
     img.half_a   = read(roles.half_a);
     img.half_b   = read(roles.half_b);
     img.remodulation = read(roles.remodulation);
+    img.motion       = read(roles.motion);
     auto convert = [&](ImageBuf& image, const std::string& from,
                        const std::string& to, const InputArg& arg) {
         std::string err;
@@ -367,6 +528,8 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
             fail(format("'{}': {}", j.albedo.path, one_line(clean.geterror())));
         img.albedo = std::move(clean);
     }
+    if (j.temporal > 0)
+        combine_neighbours(j, p, files, img, result);
     auto guide = [](const OptionalRole& o, const ImageBuf& image) {
         return o.used ? &image : nullptr;
     };
@@ -479,7 +642,8 @@ input_paths(const Job& j)
 {
     std::vector<std::string> paths;
     for (const InputArg* a : { &j.in, &j.albedo, &j.normal, &j.depth, &j.id,
-                               &j.variance, &j.half_a, &j.half_b, &j.aux })
+                               &j.variance, &j.half_a, &j.half_b, &j.aux,
+                               &j.motion })
         if (a->given)
             paths.push_back(a->path);
     return paths;

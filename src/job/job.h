@@ -100,6 +100,20 @@ struct Job {
     /// Rows per strip (--tile); 0: automatic (the whole frame when it is
     /// small, else strips as tall as the memory budget allows).
     int tile_rows = 0;
+    /// Frames on each side denoised with this one (--temporal K,
+    /// docs/TEMPORAL.md); 0: the frame alone.
+    int temporal = 0;
+    /// With temporal: the camera and the scene do not move, so that the
+    /// neighbours need no motion vectors (--static-camera).
+    bool static_camera = false;
+    /// The motion vectors (--motion; default: the --in file's by its
+    /// convention).
+    InputArg motion;
+    /// With temporal: the jobs of the neighbouring frames (their inputs'
+    /// paths; the rest as this job's), and each one's frame offset.
+    /// The batch fills them (src/cli/sequence.cpp).
+    std::vector<Job> neighbours;
+    std::vector<int> neighbour_offsets;
 };
 
 /// The layer of the output that holds the diagnostic maps.

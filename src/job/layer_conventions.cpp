@@ -89,6 +89,7 @@ cycles_convention(const std::vector<std::string>& names,
     c.albedo = pass("Denoising Albedo", "RGB");
     c.normal = pass("Denoising Normal", "XYZ");
     c.depth  = pass("Denoising Depth", "Z");
+    c.motion = pass("Vector", "XYZW");
     // The Cryptomatte ranks of this layer, not another view layer's.
     std::vector<std::string> own;
     for (const std::string& n : names)
@@ -136,6 +137,9 @@ aov_passes(const std::vector<std::string>& names, Convention& c)
             c.normal = normal;
     if (has_channel(names, "Z"))
         c.depth = "Z";
+    for (const char* comps : { "XY", "RG" })
+        if (c.motion.empty() && has_layer(names, "motionvector", comps))
+            c.motion = "motionvector";
     c.id = cryptomatte_object_selection(names);
 }
 

@@ -42,6 +42,9 @@ struct Convention {
     std::string name;
     /// Selections; empty = none found (beauty: the plain R,G,B[,A]).
     std::string beauty, albedo, normal, depth, id;
+    /// Motion vectors (docs/TEMPORAL.md): Cycles' Vector pass (4
+    /// channels), Arnold's motionvector (2).
+    std::string motion;
     std::vector<LayerArg> layers;
     /// The residual selection ('+' joins sets); empty = the beauty minus the
     /// layers.

@@ -121,6 +121,9 @@ Filter parameters (docs/FILTER.md):
 
 Frame sequences (oiiotool's conventions) and batches:
 {--frames}
+{--temporal}
+{--static-camera}
+{--motion}
 {--skip-existing}
 {--fail-fast}
 {--report}
@@ -319,6 +322,17 @@ options()
           "(share/zdn-format.md)." },
         { Kind::Flag, "--force", nullptr, FIELD(force), "",
           "Allow the output to replace one of the inputs." },
+        { Kind::Whole, "--temporal", nullptr, FIELD(job.temporal), "K",
+          "Denoise each frame with frames t-K..t+K as extra\n"
+          "evidence: their light, reprojected through the motion\n"
+          "vectors, counts where the guides agree (0; a frame\n"
+          "sequence; docs/TEMPORAL.md)" },
+        { Kind::Flag, "--static-camera", nullptr, FIELD(job.static_camera), "",
+          "With --temporal: the camera and the scene do not\n"
+          "move, so no motion vectors are needed." },
+        { Kind::Input, "--motion", nullptr, FIELD(job.motion), "FILE",
+          "Motion vectors for --temporal (default: a Cycles\n"
+          "file's Vector pass, Arnold's motionvector)." },
         { Kind::Text, "--frames", nullptr, FIELD(frames), "LIST",
           "Frames to denoise: 1001-1100, 1-99x2 (every 2nd),\n"
           "1,5,10-20; any FILE (and -o) may then name a frame\n"

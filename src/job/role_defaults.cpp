@@ -34,6 +34,7 @@ apply_defaults(Job& j, const Convention& conv, std::vector<std::string>& log)
     pick(j.normal, j.no_normal, conv.normal);
     pick(j.depth, j.no_depth, conv.depth);
     pick(j.id, j.no_id, conv.id);
+    pick(j.motion, j.temporal == 0 || j.static_camera, conv.motion);
 }
 
 
@@ -57,7 +58,8 @@ apply_file_defaults(Job& j, InputFiles& files)
                   { &j.id, Role::ObjectId, &Convention::id },
                   { &j.variance, Role::Variance, nullptr },
                   { &j.half_a, Role::Radiance, &Convention::beauty },
-                  { &j.half_b, Role::Radiance, &Convention::beauty } };
+                  { &j.half_b, Role::Radiance, &Convention::beauty },
+                  { &j.motion, Role::Motion, &Convention::motion } };
     for (const auto& r : roles) {
         if (!r.arg->given || !r.arg->channels.empty())
             continue;

@@ -43,6 +43,15 @@ validate(const Job& job, Spelling spelling)
                    : format("\"tile\" must be 0 (automatic) or a number of "
                             "rows, not {}",
                             job.tile_rows);
+    if (job.temporal < 0 || job.temporal > 8)
+        return cli ? format("--temporal needs 0 to 8 frames on each side, "
+                            "got {}",
+                            job.temporal)
+                   : format("\"temporal\" must be 0 to 8, not {}",
+                            job.temporal);
+    if (job.temporal > 0 && job.mode == Mode::Layers)
+        return "--temporal works in --mode beauty (the layers' light is "
+               "not combined across frames yet; docs/TEMPORAL.md)";
     if (job.albedo_samples < 0)
         return cli ? format("--albedo-samples needs a number >= 1, got {}",
                             job.albedo_samples)

@@ -1,0 +1,128 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// The neighbouring frames of --temporal (docs/TEMPORAL.md).
+
+#include "neighbour_frames.h"
+
+#include <cmath>
+
+#include <OpenImageIO/imagebufalgo_util.h>
+
+#include "../internal.h"
+#include "failure.h"
+#include "strips.h"
+
+namespace zdenoise {
+namespace job {
+
+using namespace OIIO;
+using OIIO::Strutil::fmt::format;
+
+namespace {
+
+/// The neighbour's file that plays the role frame t's `path` plays.
+std::string
+neighbour_path(const Job& j, const Job& nj, const std::string& path)
+{
+    for (InputArg Job::*m : { &Job::in, &Job::albedo, &Job::normal, &Job::depth,
+                              &Job::id, &Job::variance, &Job::half_a,
+                              &Job::half_b, &Job::aux, &Job::motion })
+        if ((j.*m).given && (j.*m).path == path)
+            return (nj.*m).path;
+    return path;  // not reached: every selection names one of the inputs
+}
+
+}  // namespace
+
+
+FrameRoles
+read_neighbour_roles(const Job& j, const Job& nj, const RoleSelections& roles,
+                     InputFiles& frame_files, const ROI& frame_t, int threads)
+{
+    struct Wanted {
+        const Selection* selection;
+        ImageBuf FrameRoles::*image;
+    };
+    std::vector<Wanted> wanted = { { &roles.radiance, &FrameRoles::radiance },
+                                   { &roles.albedo, &FrameRoles::albedo } };
+    const std::pair<const OptionalRole*, ImageBuf FrameRoles::*> optional[]
+        = { { &roles.normal, &FrameRoles::normal },
+            { &roles.depth, &FrameRoles::depth },
+            { &roles.id, &FrameRoles::id },
+            { &roles.variance, &FrameRoles::variance },
+            { &roles.half_a, &FrameRoles::half_a },
+            { &roles.half_b, &FrameRoles::half_b },
+            { &roles.motion, &FrameRoles::motion } };
+    for (const auto& [role, image] : optional)
+        if (role->used)
+            wanted.push_back({ &role->selection, image });
+
+    InputFiles files;
+    std::vector<Selection> selections;
+    for (const Wanted& w : wanted) {
+        Selection s = *w.selection;
+        s.path      = neighbour_path(j, nj, w.selection->path);
+        const InputHeader& h = files.header(s.path);
+        if (!(h.window() == frame_t))
+            fail(format("'{}' covers other pixels than '{}'", s.path, j.in.path));
+        const std::vector<std::string>& names
+            = frame_files.header(w.selection->path).channelnames;
+        for (int c : s.indices)
+            if (size_t(c) >= h.channelnames.size()
+                || h.channelnames[size_t(c)] != names[size_t(c)])
+                fail(format("'{}' has no channel '{}' where '{}' has it",
+                            s.path, names[size_t(c)], w.selection->path));
+        files.want(s.path, s.indices);
+        selections.push_back(s);
+    }
+    for (const std::string& path : files.paths()) {
+        std::string err;
+        files.rows(path).reserve(frame_t.height());
+        if (!files.rows(path).hold(frame_t.ybegin, frame_t.yend, threads, err))
+            fail(format("cannot read '{}': {}", path, one_line(err)));
+    }
+    Strip whole;
+    whole.files   = &files;
+    whole.threads = threads;
+    whole.place(frame_t, 0, frame_t.height(), 0);
+    FrameRoles f;
+    for (size_t i = 0; i < wanted.size(); ++i)
+        f.*(wanted[i].image) = whole.image(selections[i]);  // copies
+    return f;
+}
+
+
+void
+vector_flows(const ImageBuf& vectors, ImageBuf& to_previous, ImageBuf& to_next,
+             int threads)
+{
+    const ROI roi = vectors.roi();
+    ImageSpec spec(roi.width(), roi.height(), 2, TypeDesc::FLOAT);
+    spec.x = roi.xbegin;
+    spec.y = roi.ybegin;
+    to_previous.reset(spec);
+    to_next.reset(spec);
+    const bool cycles = vectors.nchannels() >= 4;
+    ImageBufAlgo::parallel_image(roi, detail::paropt_any_length(threads), [&](ROI r) {
+        for (ImageBuf::ConstIterator<float> v(vectors, r); !v.done(); ++v) {
+            float* p = static_cast<float*>(to_previous.pixeladdr(v.x(), v.y()));
+            float* n = static_cast<float*>(to_next.pixeladdr(v.x(), v.y()));
+            // CYCLES_VECTOR_CONVENTION (docs/TEMPORAL.md "Motion vectors")
+            if (cycles) {
+                p[0] = v[0];
+                p[1] = -v[1];
+                n[0] = -v[2];
+                n[1] = v[3];
+            } else {
+                p[0] = -v[0];
+                p[1] = v[1];
+                n[0] = v[0];
+                n[1] = -v[1];
+            }
+        }
+    });
+}
+
+}  // namespace job
+}  // namespace zdenoise
