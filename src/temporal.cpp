@@ -10,6 +10,7 @@
 #include <zdenoise/temporal.h>
 
 #include <cmath>
+#include <algorithm>
 #include <cstring>
 #include <limits>
 
@@ -153,6 +154,93 @@ reproject(int x, int y, const float* flow, int& qx, int& qy)
     return true;
 }
 
+constexpr size_t kNoMatch = ~size_t(0);
+
+/// A pixel of frame t's region and one neighbour: the neighbour's pixel
+/// that shows the same surface (kNoMatch: none), and the difference of
+/// their light's luminance (NaN where a channel is not demodulated in
+/// both: no evidence for the test).
+struct Match {
+    size_t j = kNoMatch;
+    float dz = 0.0f;
+    /// The flow lands on the pixel itself (a static camera, a background
+    /// that does not move): no sub-pixel misregistration.
+    bool exact = false;
+};
+
+/// matches[k][i] for every pixel i of t's region and neighbour k.
+std::vector<std::vector<Match>>
+match_neighbours(const FramePlanes& t, const std::vector<FramePlanes>& ns,
+                 const std::vector<std::vector<float>>& flows,
+                 const TemporalOptions& opt, float eps, int nthreads)
+{
+    std::vector<std::vector<Match>> out(ns.size());
+    const ROI& w = t.window;
+    for (size_t k = 0; k < ns.size(); ++k) {
+        const FramePlanes& n = ns[k];
+        std::vector<Match>& mk = out[k];
+        mk.assign(w.npixels(), Match());
+        detail::for_rows(w, nthreads, [&](int y) {
+            for (int x = w.xbegin; x < w.xend; ++x) {
+                const size_t i = t.index(x, y);
+                int qx = 0, qy = 0;
+                const float* f = flows[k].empty() ? nullptr : &flows[k][2 * i];
+                if (!reproject(x, y, f, qx, qy) || !n.inside(qx, qy))
+                    continue;
+                const size_t j = n.index(qx, qy);
+                if (!same_surface(t, i, n, j, opt))
+                    continue;
+                mk[i].j     = j;
+                mk[i].exact = !f || (f[0] == 0.0f && f[1] == 0.0f);
+                float zt[3], zn[3];
+                bool both = true;
+                for (int c = 0; c < 3; ++c) {
+                    const float at = t.albedo[3 * i + size_t(c)];
+                    const float an = n.albedo[3 * j + size_t(c)];
+                    both = both && detail::albedo_demodulated(at, eps)
+                           && detail::albedo_demodulated(an, eps);
+                    zt[c] = t.rgb[3 * i + size_t(c)] / (at + eps);
+                    zn[c] = n.rgb[3 * j + size_t(c)] / (an + eps);
+                }
+                const float d = detail::luminance(zn) - detail::luminance(zt);
+                mk[i].dz = both && std::isfinite(d)
+                               ? d
+                               : std::numeric_limits<float>::quiet_NaN();
+            }
+        });
+    }
+    return out;
+}
+
+/// Does the neighbour show frame t's light around pixel (x, y)? A paired
+/// test on the luminance differences of the matched pixels in the box of
+/// radius r: their mean within `sigmas` standard errors of 0 (at least 4
+/// pairs). A moving shadow, a light switched on or a reflection that moves
+/// differently from its surface changes the mean; noise only its spread.
+bool
+same_light(const std::vector<Match>& m, const ROI& w, int x, int y, int r,
+           float sigmas)
+{
+    double n = 0.0, sum = 0.0, sum2 = 0.0;
+    for (int v = std::max(y - r, w.ybegin); v <= std::min(y + r, w.yend - 1); ++v)
+        for (int u = std::max(x - r, w.xbegin); u <= std::min(x + r, w.xend - 1);
+             ++u) {
+            const Match& p = m[size_t(v - w.ybegin) * size_t(w.width())
+                               + size_t(u - w.xbegin)];
+            if (p.j == kNoMatch || !std::isfinite(p.dz))
+                continue;
+            n += 1.0;
+            sum += p.dz;
+            sum2 += double(p.dz) * p.dz;
+        }
+    if (n < 4.0)
+        return false;
+    const double mean = sum / n;
+    const double var  = std::max(sum2 - n * mean * mean, 0.0) / (n - 1.0);
+    return std::fabs(mean) <= double(sigmas) * std::sqrt(var / n);
+}
+
+
 bool
 check_frame_images(ImageBuf& dst, const TemporalFrame& f, const ROI& window,
                    const std::string& which)
@@ -226,15 +314,33 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
             return false;
         }
     }
-    const FramePlanes t = read_frame(frame, roi, true);
+    // Frame t and the flows over roi and the test's box around it.
+    const int r = std::max(opt.test_radius, 0);
+    ROI region  = roi_intersection(
+        ROI(roi.xbegin - r, roi.xend + r, roi.ybegin - r, roi.yend + r), full);
+    region.chbegin = 0;
+    region.chend   = roi.chend;
+    const FramePlanes t = read_frame(frame, region, true);
     std::vector<FramePlanes> ns;
     std::vector<std::vector<float>> flows;
     for (const TemporalFrame& n : neighbours) {
         ns.push_back(read_frame(n, n.radiance->roi(), !t.variance.empty()
                                                           || !t.half_a.empty()));
-        flows.push_back(n.flow ? detail::read_channels(*n.flow, roi, 0, 2)
-                               : std::vector<float>());
+        // Beyond the flow's pixels (a caller's flow over roi only) the
+        // test's box has no correspondence.
+        const ROI fr = n.flow ? roi_intersection(n.flow->roi(), region) : region;
+        std::vector<float> f;
+        if (n.flow) {
+            f.assign(2 * region.npixels(), std::numeric_limits<float>::quiet_NaN());
+            const std::vector<float> part = detail::read_channels(*n.flow, fr, 0, 2);
+            for (int y = fr.ybegin; y < fr.yend; ++y)
+                std::copy_n(&part[2 * size_t(y - fr.ybegin) * size_t(fr.width())],
+                            2 * size_t(fr.width()), &f[2 * t.index(fr.xbegin, y)]);
+        }
+        flows.push_back(std::move(f));
     }
+    const std::vector<std::vector<Match>> matches
+        = match_neighbours(t, ns, flows, opt, opt.albedo_eps, nthreads);
     const bool with_variance = !t.variance.empty();
     const bool with_halves   = !t.half_a.empty();
     for (const FramePlanes& n : ns)
@@ -257,6 +363,7 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
         img.reset(s, InitializePixels::Yes);
     };
     plane(dst.frames, 1);
+    plane(dst.albedo, 3);
     if (with_variance)
         plane(dst.variance, t.variance_channels);
     if (with_halves) {
@@ -266,19 +373,17 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
 
     const float eps = opt.albedo_eps;
     auto demod = [eps](float a) { return detail::albedo_demodulated(a, eps); };
-    const int width = roi.width();
     detail::for_rows(roi, nthreads, [&](int y) {
         float var[3] = {}, ha[3] = {}, hb[3] = {};
         for (int x = roi.xbegin; x < roi.xend; ++x) {
             const size_t i = t.index(x, y);
-            const size_t o = size_t(y - roi.ybegin) * size_t(width)
-                             + size_t(x - roi.xbegin);
             // Per channel: the sum of light and of its variance, and the
             // frames counted.
-            double zsum[3] = {}, vsum[3] = {}, asum[3] = {}, bsum[3] = {};
-            int count[3] = {};
+            double zsum[3] = {}, vsum[3] = {}, asum[3] = {}, bsum[3] = {},
+                   albsum[3] = {};
+            int count[3] = {}, acount[3] = {};
             int frames = 1;
-            auto add = [&](const FramePlanes& f, size_t j, int c) {
+            auto add = [&](const FramePlanes& f, size_t j, int c, bool exact) {
                 const float scale = 1.0f / (f.albedo[3 * j + size_t(c)] + eps);
                 zsum[c] += double(f.rgb[3 * j + size_t(c)]) * scale;
                 if (with_variance) {
@@ -291,26 +396,29 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
                     asum[c] += double(f.half_a[3 * j + size_t(c)]) * scale;
                     bsum[c] += double(f.half_b[3 * j + size_t(c)]) * scale;
                 }
+                if (exact) {
+                    albsum[c] += double(f.albedo[3 * j + size_t(c)]);
+                    ++acount[c];
+                }
                 ++count[c];
             };
             for (int c = 0; c < 3; ++c)
                 if (demod(t.albedo[3 * i + size_t(c)]))
-                    add(t, i, c);
+                    add(t, i, c, true);
             for (size_t k = 0; k < ns.size(); ++k) {
                 const FramePlanes& n = ns[k];
-                int qx = 0, qy = 0;
-                const float* f = flows[k].empty() ? nullptr : &flows[k][2 * o];
-                if (!reproject(x, y, f, qx, qy) || !n.inside(qx, qy))
+                const Match& m       = matches[k][i];
+                if (m.j == kNoMatch
+                    || !same_light(matches[k], t.window, x, y, r,
+                                   opt.rejection_sigmas))
                     continue;
-                const size_t j = n.index(qx, qy);
-                if (!same_surface(t, i, n, j, opt))
-                    continue;
+                const size_t j = m.j;
                 bool used = false;
                 for (int c = 0; c < 3; ++c)
                     if (demod(t.albedo[3 * i + size_t(c)])
                         && demod(n.albedo[3 * j + size_t(c)])
                         && std::isfinite(n.rgb[3 * j + size_t(c)])) {
-                        add(n, j, c);
+                        add(n, j, c, m.exact);
                         used = true;
                     }
                 frames += used;
@@ -318,9 +426,17 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
             float* out_rgb = static_cast<float*>(
                 dst.radiance.pixeladdr(x, y));
             for (int c = 0; c < 3; ++c) {
+                float& out_albedo = static_cast<float*>(
+                    dst.albedo.pixeladdr(x, y))[c];
+                out_albedo = t.albedo[3 * i + size_t(c)];
                 if (!count[c])
                     continue;  // not demodulated: frame t's radiance
-                const double a = double(t.albedo[3 * i + size_t(c)]) + eps;
+                // The albedo averaged over the same frames where the flow
+                // is exact: its own noise (a render's albedo AOV) would
+                // flicker otherwise. A fractional flow would shift the
+                // texture by up to half a pixel: there it stays frame t's.
+                out_albedo     = float(albsum[c] / acount[c]);
+                const double a = double(out_albedo) + eps;
                 out_rgb[c] = float(zsum[c] / count[c] * a);
                 if (with_variance)
                     var[c] = float(vsum[c] / (double(count[c]) * count[c]) * a * a);

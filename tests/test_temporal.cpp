@@ -206,10 +206,18 @@ TEST(Temporal, MovingSquareLeavesNoTrail)
     // The square itself gains from its reprojected neighbours.
     EXPECT_LT(synth::rel_mse(c.radiance, ft.clean, square_x(t), square_x(t) + side, 24, 40),
               0.35 * synth::rel_mse(ft.noisy, ft.clean, square_x(t), square_x(t) + side, 24, 40));
-    // Every pixel counted the frames that agree: 5 on the square and far
-    // from it, fewer in the trail.
-    EXPECT_EQ(c.frames.getchannel(square_x(t) + 3, 30, 0, 0), float(nframes));
-    EXPECT_EQ(c.frames.getchannel(5, 5, 0, 0), float(nframes));
+    // Each pixel counts the frames that agree: nearly all of them on the
+    // square and far from it (the light test rejects a few by chance at 3
+    // standard errors), fewer in the trail.
+    auto mean_frames = [&](int x0, int x1, int y0, int y1) {
+        double sum = 0.0;
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x)
+                sum += c.frames.getchannel(x, y, 0, 0);
+        return sum / double((x1 - x0) * (y1 - y0));
+    };
+    EXPECT_GT(mean_frames(square_x(t) + 2, square_x(t) + side - 2, 26, 38), 4.8);
+    EXPECT_GT(mean_frames(0, W, 0, 16), 4.8);
     EXPECT_LT(c.frames.getchannel(square_x(t) - 2, 30, 0, 0), float(nframes));
 }
 

@@ -6,13 +6,15 @@ banded tall box, a striped cylinder, a checkered sphere and a rectangular area l
   --motion static   camera and scene fixed; only the sampling seed changes per frame, so
                     the ideal output is the same image in every frame.
   --motion pan      the camera translates right and up and yaws slightly to the right
-                    (background moves ~3-4 px/frame left and ~1 px/frame down in the image)
-                    while the sphere flies right and up (~+7 px/frame in x, ~-1.5 px/frame in y
-                    net on screen), so there are disocclusions behind it.
+                    (background moves 3.7-5.3 px/frame left and 0.9-1.6 px/frame down in the
+                    image) while the sphere flies right and up (about +7.1 px/frame in x and
+                    -1.2 px/frame in y on screen), so there are disocclusions behind it.
 
 Seed of frame f = f + --seed-offset (default 0).  Motion blur is off (the Vector pass needs it
-off).  One multilayer float32 EXR per frame (layer `ViewLayer`): Combined, Z, Normal, Position,
-Vector, IndexOB, Denoising Albedo/Normal/Depth, CryptoObject00/01.
+off).  One multilayer float32 (ZIP) EXR per frame, layer `ViewLayer`, 27 channels: Combined
+(RGBA), Depth (Z pass), Normal, Position, Vector (XYZW), IndexOB, Denoising Albedo/Normal/Depth,
+CryptoObject00 (2 levels = one RGBA layer).  Object pass_index: floor 1, ceiling 2, back_wall 3,
+left_wall 4, right_wall 5, tall_box 6, cylinder 7, sphere 8.  Vector convention: README.md.
 
 blender -b --factory-startup -noaudio --python sequence_scene.py -- \
     --motion pan --frames 8 --first 1 --spp 16 --out-pattern /tmp/seq/pan.####.exr

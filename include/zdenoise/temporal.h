@@ -23,6 +23,13 @@ struct TemporalOptions {
     float depth_tolerance = 0.05f;
     /// Normals (Guides::normal) must have at least this cosine.
     float normal_cut = 0.9f;
+    /// A neighbour's pixel counts only where the light agrees around it:
+    /// over the box of this radius, the mean difference of the matched
+    /// pixels' light luminance lies within `rejection_sigmas` standard
+    /// errors of 0 (a paired test; docs/TEMPORAL.md). It rejects what the
+    /// guides cannot see: moving shadows and highlights, changing lights.
+    int test_radius        = 2;
+    float rejection_sigmas = 3.0f;
     /// As FilterOptions::albedo_eps: light = radiance / (albedo + eps)
     /// where the albedo is demodulated (docs/FILTER.md section 1).
     float albedo_eps = 1e-3f;
@@ -48,6 +55,10 @@ struct TemporalFrame {
 /// What temporal_combine() makes of frame t.
 struct TemporalCombined {
     ImageBuf radiance;  ///< frame t's channels, R, G, B combined
+    /// R, G, B: the albedo averaged over the same frames (what the
+    /// combined radiance is to be demodulated and remodulated by: a
+    /// render's albedo AOV has noise of its own, which would flicker).
+    ImageBuf albedo;
     ImageBuf variance;  ///< combined, when frame t has a variance guide
     ImageBuf half_a, half_b;  ///< combined, when frame t has halves
     ImageBuf frames;    ///< 1 channel: the frames averaged at each pixel
@@ -58,8 +69,9 @@ struct TemporalCombined {
 /// pixel noise stays independent) lies in its data window and shows the
 /// same surface (both surface or both not; depth within depth_tolerance;
 /// normals' cosine >= normal_cut; the same object id, or the same primary
-/// Cryptomatte id), the light z = L / (A + eps) of each demodulated channel
-/// is averaged, and the result is remodulated by frame t's albedo. Channels
+/// Cryptomatte id) and the same light (the paired test of test_radius),
+/// the light z = L / (A + eps) of each demodulated channel is averaged,
+/// as is the albedo A, and the light is remodulated by that albedo. Channels
 /// that are not demodulated in both frames keep frame t's radiance.
 /// Variance guides combine as the variance of that mean; halves combine
 /// as the radiance. dst.radiance carries frame t's other channels. Errors

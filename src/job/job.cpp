@@ -458,6 +458,7 @@ combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
     if (!temporal_combine(c, t, neighbours, options, {}, j.threads))
         fail(format("--temporal: {}", one_line(c.radiance.geterror())));
     img.radiance = std::move(c.radiance);
+    img.albedo   = std::move(c.albedo);
     if (img.variance.initialized())
         img.variance = std::move(c.variance);
     if (img.half_a.initialized()) {
