@@ -255,3 +255,43 @@ TEST(Temporal, RefusesANeighbourOfAnotherSize)
     EXPECT_NE(c.radiance.geterror().find("neighbour 0"), std::string::npos)
         << c.radiance.geterror();
 }
+
+
+// Per pixel, in a fixed order of neighbours: any thread count and any ROI
+// give the whole-image pixels bit for bit (the light test's box reads
+// around the ROI).
+TEST(Temporal, ThreadsAndRoiGiveTheWholeImagePixels)
+{
+    std::vector<synth::Scene> frames;
+    for (int seed = 1; seed <= 3; ++seed)
+        frames.push_back(synth::staircase(64, 48, 8, { 8, uint32_t(200 + seed) }));
+    auto as_frame = [](const synth::Scene& s) {
+        zdenoise::TemporalFrame f;
+        f.radiance         = &s.noisy;
+        f.albedo           = &s.albedo;
+        f.guides.depth     = &s.depth;
+        f.guides.object_id = &s.object_id;
+        return f;
+    };
+    const std::vector<zdenoise::TemporalFrame> neighbours = { as_frame(frames[0]),
+                                                              as_frame(frames[2]) };
+    zdenoise::TemporalCombined whole;
+    ASSERT_TRUE(zdenoise::temporal_combine(whole, as_frame(frames[1]), neighbours,
+                                           {}, {}, 1));
+    for (int nthreads : { 2, 3 }) {
+        zdenoise::TemporalCombined c;
+        ASSERT_TRUE(zdenoise::temporal_combine(c, as_frame(frames[1]), neighbours, {},
+                                               {}, nthreads));
+        EXPECT_TRUE(synth::same_pixels(c.radiance, whole.radiance)) << nthreads;
+        EXPECT_TRUE(synth::same_pixels(c.frames, whole.frames)) << nthreads;
+    }
+    const OIIO::ROI part(9, 40, 7, 30, 0, 3);
+    zdenoise::TemporalCombined c;
+    ASSERT_TRUE(zdenoise::temporal_combine(c, as_frame(frames[1]), neighbours, {}, part, 2));
+    for (int y = part.ybegin; y < part.yend; ++y)
+        for (int x = part.xbegin; x < part.xend; ++x)
+            for (int ch = 0; ch < 3; ++ch)
+                ASSERT_EQ(c.radiance.getchannel(x, y, 0, ch),
+                          whole.radiance.getchannel(x, y, 0, ch))
+                    << x << "," << y;
+}
