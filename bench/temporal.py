@@ -11,7 +11,9 @@ camera and a moving sphere):
             output frames (the pan: frame 4 against frame 5 at the place the
             reference's vectors take each pixel, on pixels visible in both),
             for single-frame and temporal; the pan's also divided by the same
-            for the 1024-spp references of frames 4 and 5;
+            for the 1024-spp references of frames 4 and 5, and the same on
+            the light (radiance over the references' albedo), where the
+            nearest pixel's misregistration of texture cancels;
   relMSE    of the middle frame (4) against its high-sample reference;
   ghost     relMSE of frame 4 on the pixels disoccluded since frame 3 or
             until frame 5 (by the reference's vectors and object ids).
@@ -89,19 +91,26 @@ def main():
     ap.add_argument('--k', type=int, default=2)
     ap.add_argument('--frames', default='1-8')
     ap.add_argument('--zdenoise', default=os.path.join(HERE, '..', 'build', 'bin', 'zdenoise'))
+    ap.add_argument('--args', default='', help='more zdenoise arguments for both runs')
+    ap.add_argument('--aux', action='store_true',
+                    help='give both runs the deterministic aux images <seq>_aux.#.exr '
+                         '(share/blender/zdenoise_aux.py --frame F; docs/AUX.md)')
     a = ap.parse_args()
     first, last = (int(x) for x in a.frames.split('-'))
     out = tempfile.mkdtemp(prefix='zdenoise_temporal_bench_')
-    print('| sequence | flicker single | flicker K=%d | ratio | flicker / reference\'s '
-          '(single, K=%d) | relMSE frame 4 single | K=%d | ghost relMSE single | K=%d |'
-          % (a.k, a.k, a.k, a.k))
-    print('|---|---|---|---|---|---|---|---|---|')
+    print('| sequence | flicker single | flicker K=%d | ratio | flicker / references\' '
+          '(single, K=%d) | light flicker ratio | light flicker / references\' (single, K=%d) '
+          '| relMSE frame 4 single | K=%d | ghost relMSE single | K=%d |'
+          % (a.k, a.k, a.k, a.k, a.k))
+    print('|---|---|---|---|---|---|---|---|---|---|---|')
     for seq in ('static', 'pan'):
         pattern = os.path.join(a.dir, seq + '.#.exr')
         single = os.path.join(out, seq + '_single.#.exr')
         temporal = os.path.join(out, seq + '_k.#.exr')
-        run(a.zdenoise, pattern, a.frames, single, [])
-        run(a.zdenoise, pattern, a.frames, temporal, ['--temporal', str(a.k)])
+        extra = ['--aux', os.path.join(a.dir, seq + '_aux.#.exr')] if a.aux else []
+        extra += a.args.split()
+        run(a.zdenoise, pattern, a.frames, single, extra)
+        run(a.zdenoise, pattern, a.frames, temporal, extra + ['--temporal', str(a.k)])
         frame = lambda p, f: p.replace('#', '%04d' % f)
         ref4 = os.path.join(a.dir, seq + '_ref.0004.exr')
         ref5 = os.path.join(a.dir, seq + '_ref.0005.exr')
@@ -112,6 +121,7 @@ def main():
                 d = [np.mean((outs[f + 1] - outs[f]) ** 2) for f in range(first, last)]
                 row[name + '_flicker'] = float(np.mean(d))
                 row[name + '_norm'] = float('nan')
+                row[name + '_light'] = row[name + '_light_norm'] = float('nan')
                 ghost_mask = None
             else:
                 ids4 = load(ref4, ['IndexOB.X'])[:, :, 0]
@@ -124,6 +134,16 @@ def main():
                 dref = (r5[qy, qx] - r4) ** 2
                 row[name + '_flicker'] = float(np.mean(d[same]))
                 row[name + '_norm'] = float(np.mean(d[same]) / np.mean(dref[same]))
+                # The same on the light (divided by the references' albedo):
+                # the texture's half-pixel misregistration under the nearest
+                # pixel, which dominates the radiance's, cancels there.
+                alb = ['Denoising Albedo.R', 'Denoising Albedo.G', 'Denoising Albedo.B']
+                a4 = load(ref4, alb) + 1e-3
+                a5 = load(ref5, alb)[qy, qx] + 1e-3
+                dl = (outs[5][qy, qx] / a5 - outs[4] / a4) ** 2
+                dlref = (r5[qy, qx] / a5 - r4 / a4) ** 2
+                row[name + '_light'] = float(np.mean(dl[same]))
+                row[name + '_light_norm'] = float(np.mean(dl[same]) / np.mean(dlref[same]))
                 # Disoccluded: frame 4's pixels not seen in frame 3 or 5 (the
                 # noisy frames' own vectors and ids: the references have
                 # only frames 4 and 5).
@@ -136,9 +156,11 @@ def main():
             row[name + '_ghost'] = (rel_mse(outs[4], rgb(ref4), ghost_mask)
                                     if ghost_mask is not None and ghost_mask.any()
                                     else float('nan'))
-        print('| %s | %.3g | %.3g | %.2f | %.2f, %.2f | %.5f | %.5f | %s | %s |' % (
+        print('| %s | %.3g | %.3g | %.2f | %.2f, %.2f | %.2f | %.2f, %.2f | %.5f | %.5f | %s | %s |' % (
             seq, row['single_flicker'], row['k_flicker'],
             row['k_flicker'] / row['single_flicker'], row['single_norm'], row['k_norm'],
+            row['k_light'] / row['single_light'], row['single_light_norm'],
+            row['k_light_norm'],
             row['single_rel'], row['k_rel'],
             '%.5f' % row['single_ghost'] if row['single_ghost'] == row['single_ghost'] else '-',
             '%.5f' % row['k_ghost'] if row['k_ghost'] == row['k_ghost'] else '-'))

@@ -360,3 +360,29 @@ TEST_F(Sequence, TemporalUsesTheNeighboursAndNamesAMissingOne)
     EXPECT_EQ(r.status, 2) << r.err;
     EXPECT_NE(r.err.find("--temporal needs a frame sequence"), std::string::npos) << r.err;
 }
+
+
+// --temporal in strips: each strip reads its neighbours' rows where they
+// are needed; the frames come out as a whole-frame run writes them.
+TEST_F(Sequence, TemporalStripsEqualTheWholeFrame)
+{
+    for (int f : { 1, 2, 3 }) {
+        synth::Scene s = synth::staircase(48, 120, 8, { 8, uint32_t(300 + f) });
+        const std::string n = std::to_string(f);
+        ASSERT_TRUE(s.noisy.write(path("noisy.000" + n + ".exr")));
+        ASSERT_TRUE(s.albedo.write(path("albedo.000" + n + ".exr")));
+        ASSERT_TRUE(s.depth.write(path("depth.000" + n + ".exr")));
+    }
+    const std::string args = "--in " + path("noisy.#.exr") + " --albedo "
+                             + path("albedo.#.exr") + " --depth " + path("depth.#.exr")
+                             + " --frames 1-3 --temporal 1 --static-camera --rmax 6 -o ";
+    RunResult whole = zdenoise(args + path("whole.#.exr"));
+    ASSERT_EQ(whole.status, 0) << whole.err;
+    RunResult strips = zdenoise(args + path("strips.#.exr") + " --tile 16 -v");
+    ASSERT_EQ(strips.status, 0) << strips.err;
+    EXPECT_NE(strips.out.find("strips of 16 rows"), std::string::npos) << strips.out;
+    for (const char* f : { "0001", "0002", "0003" })
+        EXPECT_TRUE(same_pixels(path(std::string("whole.") + f + ".exr"),
+                                path(std::string("strips.") + f + ".exr")))
+            << f;
+}

@@ -314,10 +314,11 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
     p.output.set_row_types(sink.float_rows());
     add_output_costs(cost, sink, spec, p.output.pixel_bytes);
     if (j.temporal > 0) {
-        // The neighbours are read whole (their pixels move across strips):
-        // the frame is one strip, and each neighbour's roles (as floats),
-        // its flow and the combined images are counted.
-        j.tile_rows = p.noisy.height();
+        // The light test's box around what the filter reads; each
+        // neighbour's roles (as floats, over about as many rows as the
+        // strip: the rows its flow reaches), its flow and the combined
+        // images.
+        cost.around += TemporalOptions().test_radius;
         double role_floats = double(p.roles.radiance.indices.size()
                                     + p.roles.albedo.indices.size());
         for (const OptionalRole* o : p.roles.optional())
@@ -360,25 +361,82 @@ convert_role(const Plan& p, ImageBuf& image, const std::string& from,
 }
 
 
-/// --temporal (docs/TEMPORAL.md): frame t's radiance (and variance or
-/// halves) averaged with its neighbours' light where they show the same
-/// surface, before the filter. The neighbours are read whole, converted
-/// and prefiltered as frame t; each one's flow chains the motion vectors
-/// of the frames between.
+/// --temporal (docs/TEMPORAL.md): frame t's radiance (and albedo, variance
+/// or halves) averaged with its neighbours' light where they show the same
+/// surface and light, over what the filter reads of the strip. Frame t's
+/// images come over that and the light test's box around it; each
+/// neighbour is read over the rows its flow reaches (and the albedo
+/// prefilter's halo), converted and prefiltered as frame t. A flow chains
+/// the motion vectors of the frames between, nearest first.
 void
 combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
-                   RoleImages& img, JobResult& result)
+                   const Strip& strip, RoleImages& img, JobResult& result)
 {
+    const TemporalOptions defaults;
+    const int halo     = filter_halo(j.filter);
+    const ROI region   = strip.widened(halo);
+    const ROI around   = strip.widened(halo + defaults.test_radius);
+    auto crop = [&](ImageBuf& b, const ROI& to) {
+        if (!b.initialized() || b.roi() == to)
+            return;
+        ROI r    = to;
+        r.chbegin = 0;
+        r.chend   = b.nchannels();
+        ImageBuf c;
+        if (!ImageBufAlgo::copy(c, b, TypeFloat, r, j.threads))
+            fail(format("--temporal: {}", one_line(c.geterror())));
+        b = std::move(c);
+    };
+    for (ImageBuf* b : { &img.radiance, &img.albedo, &img.normal, &img.depth,
+                         &img.id, &img.variance, &img.half_a, &img.half_b,
+                         &img.motion })
+        crop(*b, around);
+
     const size_t n = j.neighbours.size();
+    // Nearest first, so that a flow's previous step is there.
+    std::vector<size_t> order(n);
+    for (size_t k = 0; k < n; ++k)
+        order[k] = k;
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+        return std::abs(j.neighbour_offsets[a]) < std::abs(j.neighbour_offsets[b]);
+    });
+    auto index_of = [&](int o) {
+        for (size_t k = 0; k < n; ++k)
+            if (j.neighbour_offsets[k] == o)
+                return k;
+        return n;  // o == 0: frame t
+    };
     std::vector<FrameRoles> frames(n);
-    for (size_t k = 0; k < n; ++k) {
+    std::vector<ImageBuf> flows(n);
+    const int reach = p.albedo_samples ? albedo_prefilter_halo() : 0;
+    for (size_t k : order) {
+        const int o = j.neighbour_offsets[k], dir = o > 0 ? 1 : -1;
         const Job& nj = j.neighbours[k];
+        if (!j.static_camera) {
+            // One step from the frame before it (frame t, or the neighbour
+            // nearer to it), by that frame's motion vectors.
+            const size_t before = index_of(o - dir);
+            const ImageBuf& vectors = before == n ? img.motion
+                                                  : frames[before].motion;
+            ImageBuf to_previous, to_next;
+            vector_flows(vectors, to_previous, to_next, j.threads);
+            ImageBuf& step = dir > 0 ? to_next : to_previous;
+            if (before == n) {
+                flows[k] = std::move(step);
+            } else if (!chain_flow(flows[k], flows[before], step, {}, j.threads)) {
+                fail(format("--temporal: {}", one_line(flows[k].geterror())));
+            }
+        }
+        ROI rows = rows_reached(flows[k].initialized() ? &flows[k] : nullptr,
+                                around, p.noisy);
+        const ROI used = rows;
+        rows.ybegin = std::max(rows.ybegin - reach, p.noisy.ybegin);
+        rows.yend   = std::min(rows.yend + reach, p.noisy.yend);
         try {
             frames[k] = read_neighbour_roles(j, nj, p.roles, files, p.noisy,
-                                             j.threads);
+                                             rows, j.threads);
         } catch (const Failure& f) {
-            fail(format("--temporal: neighbour frame {:+d}: {}",
-                        j.neighbour_offsets[k], f.message));
+            fail(format("--temporal: neighbour frame {:+d}: {}", o, f.message));
         }
         FrameRoles& f = frames[k];
         convert_role(p, f.radiance, p.spaces.input, p.spaces.working, nj.in);
@@ -387,41 +445,14 @@ combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
         convert_role(p, f.half_b, p.spaces.input, p.spaces.working, nj.half_b);
         if (p.albedo_samples) {
             ImageBuf clean;
-            if (!prefilter_albedo(clean, f.albedo, p.albedo_samples, {},
+            if (!prefilter_albedo(clean, f.albedo, p.albedo_samples, used,
                                   j.threads))
                 fail(format("'{}': {}", nj.albedo.path,
                             one_line(clean.geterror())));
             f.albedo = std::move(clean);
-        }
-    }
-    // flows[k]: where frame t's pixels show in neighbour k; chained one
-    // frame at a time, each step by the motion vectors of the frame it
-    // leaves.
-    std::vector<ImageBuf> flows(n);
-    if (!j.static_camera) {
-        auto at_offset = [&](int o) -> const ImageBuf& {
-            for (size_t k = 0; k < n; ++k)
-                if (j.neighbour_offsets[k] == o)
-                    return frames[k].motion;
-            return img.motion;  // o == 0
-        };
-        for (size_t k = 0; k < n; ++k) {
-            const int o = j.neighbour_offsets[k], dir = o > 0 ? 1 : -1;
-            ImageBuf flow;
-            for (int step = 0; step != o; step += dir) {
-                ImageBuf to_previous, to_next;
-                vector_flows(at_offset(step), to_previous, to_next, j.threads);
-                ImageBuf& next = dir > 0 ? to_next : to_previous;
-                if (!flow.initialized()) {
-                    flow = std::move(next);
-                    continue;
-                }
-                ImageBuf chained;
-                if (!chain_flow(chained, flow, next, {}, j.threads))
-                    fail(format("--temporal: {}", one_line(chained.geterror())));
-                flow = std::move(chained);
-            }
-            flows[k] = std::move(flow);
+            for (ImageBuf* b : { &f.radiance, &f.normal, &f.depth, &f.id,
+                                 &f.variance, &f.half_a, &f.half_b })
+                crop(*b, used);
         }
     }
     auto as_frame = [&](const ImageBuf& radiance, const ImageBuf& albedo,
@@ -455,7 +486,7 @@ combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
     TemporalOptions options;
     options.albedo_eps = j.filter.albedo_eps;
     TemporalCombined c;
-    if (!temporal_combine(c, t, neighbours, options, {}, j.threads))
+    if (!temporal_combine(c, t, neighbours, options, region, j.threads))
         fail(format("--temporal: {}", one_line(c.radiance.geterror())));
     img.radiance = std::move(c.radiance);
     img.albedo   = std::move(c.albedo);
@@ -465,10 +496,16 @@ combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
         img.half_a = std::move(c.half_a);
         img.half_b = std::move(c.half_b);
     }
-    const auto mean = ImageBufAlgo::computePixelStats(c.frames);
-    result.log.push_back(format("temporal  {:.2f} frames a pixel on average "
-                                "(of {})",
-                                mean.avg.empty() ? 1.0 : mean.avg[0], n + 1));
+    // Every image of the strip over what the filter reads.
+    for (ImageBuf* b : { &img.normal, &img.depth, &img.id, &img.remodulation,
+                         &img.motion })
+        crop(*b, region);
+    const auto stats = ImageBufAlgo::computePixelStats(c.frames);
+    if (strip.core.ybegin == p.noisy.ybegin)
+        result.log.push_back(format("temporal  {:.2f} frames a pixel on "
+                                    "average (of {}) in the first strip",
+                                    stats.avg.empty() ? 1.0 : stats.avg[0],
+                                    n + 1));
 }
 
 
@@ -522,15 +559,18 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
         convert(img.half_b, p.spaces.input, p.spaces.working, j.half_b);
     }
     if (p.albedo_samples) {
-        // Over what the filter reads: the strip and its halo.
+        // Over what the filter reads: the strip and its halo (and with
+        // --temporal, the light test's box around it).
         ImageBuf clean;
+        const int reads = filter_halo(j.filter)
+                          + (j.temporal > 0 ? TemporalOptions().test_radius : 0);
         if (!prefilter_albedo(clean, img.albedo, p.albedo_samples,
-                              strip.widened(filter_halo(j.filter)), j.threads))
+                              strip.widened(reads), j.threads))
             fail(format("'{}': {}", j.albedo.path, one_line(clean.geterror())));
         img.albedo = std::move(clean);
     }
     if (j.temporal > 0)
-        combine_neighbours(j, p, files, img, result);
+        combine_neighbours(j, p, files, strip, img, result);
     auto guide = [](const OptionalRole& o, const ImageBuf& image) {
         return o.used ? &image : nullptr;
     };

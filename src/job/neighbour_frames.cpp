@@ -5,6 +5,7 @@
 
 #include "neighbour_frames.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <OpenImageIO/imagebufalgo_util.h>
@@ -21,14 +22,17 @@ using OIIO::Strutil::fmt::format;
 
 namespace {
 
-/// The neighbour's file that plays the role frame t's `path` plays.
+/// The neighbour's file that plays the role frame t's `path` plays. The
+/// files the user named come first: frame t's job has the conventions'
+/// defaults filled in (its albedo may be the --in or --aux file), the
+/// neighbours' jobs do not.
 std::string
 neighbour_path(const Job& j, const Job& nj, const std::string& path)
 {
-    for (InputArg Job::*m : { &Job::in, &Job::albedo, &Job::normal, &Job::depth,
-                              &Job::id, &Job::variance, &Job::half_a,
-                              &Job::half_b, &Job::aux, &Job::motion })
-        if ((j.*m).given && (j.*m).path == path)
+    for (InputArg Job::*m : { &Job::in, &Job::aux, &Job::motion, &Job::albedo,
+                              &Job::normal, &Job::depth, &Job::id,
+                              &Job::variance, &Job::half_a, &Job::half_b })
+        if ((j.*m).given && (nj.*m).given && (j.*m).path == path)
             return (nj.*m).path;
     return path;  // not reached: every selection names one of the inputs
 }
@@ -38,7 +42,8 @@ neighbour_path(const Job& j, const Job& nj, const std::string& path)
 
 FrameRoles
 read_neighbour_roles(const Job& j, const Job& nj, const RoleSelections& roles,
-                     InputFiles& frame_files, const ROI& frame_t, int threads)
+                     InputFiles& frame_files, const ROI& frame_t,
+                     const ROI& rows, int threads)
 {
     struct Wanted {
         const Selection* selection;
@@ -78,18 +83,44 @@ read_neighbour_roles(const Job& j, const Job& nj, const RoleSelections& roles,
     }
     for (const std::string& path : files.paths()) {
         std::string err;
-        files.rows(path).reserve(frame_t.height());
-        if (!files.rows(path).hold(frame_t.ybegin, frame_t.yend, threads, err))
+        files.rows(path).reserve(rows.height());
+        if (!files.rows(path).hold(rows.ybegin, rows.yend, threads, err))
             fail(format("cannot read '{}': {}", path, one_line(err)));
     }
-    Strip whole;
-    whole.files   = &files;
-    whole.threads = threads;
-    whole.place(frame_t, 0, frame_t.height(), 0);
+    Strip band;
+    band.files   = &files;
+    band.threads = threads;
+    band.core = band.held = ROI(frame_t.xbegin, frame_t.xend, rows.ybegin,
+                                rows.yend);
     FrameRoles f;
     for (size_t i = 0; i < wanted.size(); ++i)
-        f.*(wanted[i].image) = whole.image(selections[i]);  // copies
+        f.*(wanted[i].image) = band.image(selections[i]);  // copies
     return f;
+}
+
+
+ROI
+rows_reached(const ImageBuf* flow, const ROI& over, const ROI& frame)
+{
+    ROI rows(frame.xbegin, frame.xend, over.ybegin, over.yend);
+    if (!flow)
+        return rows;
+    int lo = frame.yend, hi = frame.ybegin - 1;
+    for (int y = over.ybegin; y < over.yend; ++y)
+        for (int x = over.xbegin; x < over.xend; ++x) {
+            const float fy = flow->getchannel(x, y, 0, 1);
+            if (!std::isfinite(fy) || std::fabs(fy) > 1e8f)
+                continue;
+            const int q = int(std::floor(float(y) + 0.5f + fy));
+            lo = std::min(lo, q);
+            hi = std::max(hi, q);
+        }
+    rows.ybegin = std::max(lo, frame.ybegin);
+    rows.yend   = std::min(hi + 1, frame.yend);
+    if (rows.yend <= rows.ybegin)  // lands nowhere: one row, unused
+        rows.yend = (rows.ybegin = std::min(std::max(over.ybegin, frame.ybegin),
+                                            frame.yend - 1)) + 1;
+    return rows;
 }
 
 

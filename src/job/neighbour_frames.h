@@ -26,12 +26,19 @@ struct FrameRoles {
 
 /// The roles `roles` selects in job `j`'s files, read from neighbour job
 /// `nj`'s files (the frame's own paths; every role's channels named as in
-/// frame t's file, over the same pixels). `frame_t` is frame t's --in
-/// window. Fails naming the neighbour's file.
+/// frame t's file, over the same pixels), over the rows `rows` of the
+/// frame `frame_t` (frame t's --in window). Fails naming the neighbour's
+/// file.
 FrameRoles
 read_neighbour_roles(const Job& j, const Job& nj, const RoleSelections& roles,
                      InputFiles& frame_files, const OIIO::ROI& frame_t,
-                     int threads);
+                     const OIIO::ROI& rows, int threads);
+
+/// The rows of the frame `frame` that the pixels of `flow` land on (the
+/// nearest pixels of p + flow), within the frame; `flow` null: its own rows.
+OIIO::ROI
+rows_reached(const OIIO::ImageBuf* flow, const OIIO::ROI& over,
+             const OIIO::ROI& frame);
 
 /// Where each pixel of a frame shows in the previous and in the next
 /// frame (temporal_combine()'s flows: offsets in pixels, x right, y down
