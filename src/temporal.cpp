@@ -339,8 +339,40 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
         }
         flows.push_back(std::move(f));
     }
-    const std::vector<std::vector<Match>> matches
+    std::vector<std::vector<Match>> matches
         = match_neighbours(t, ns, flows, opt, opt.albedo_eps, nthreads);
+    // Chains: nearest first, so that a via's own via is applied before.
+    for (size_t k = 0; k < neighbours.size(); ++k) {
+        const int via = neighbours[k].via;
+        if (via < 0)
+            continue;
+        if (size_t(via) >= neighbours.size() || size_t(via) == k) {
+            dst.radiance.errorfmt("{}: neighbour {}'s via ({}) is no other "
+                                  "neighbour",
+                                  kOp, k, via);
+            return false;
+        }
+    }
+    std::vector<size_t> by_depth(neighbours.size());
+    auto depth = [&](size_t k) {
+        int d = 0;
+        for (int v = neighbours[k].via; v >= 0 && d <= int(neighbours.size());
+             v = neighbours[size_t(v)].via)
+            ++d;
+        return d;
+    };
+    for (size_t k = 0; k < by_depth.size(); ++k)
+        by_depth[k] = k;
+    std::stable_sort(by_depth.begin(), by_depth.end(),
+                     [&](size_t a, size_t b) { return depth(a) < depth(b); });
+    for (size_t k : by_depth) {
+        const int via = neighbours[k].via;
+        if (via < 0)
+            continue;
+        for (size_t i = 0; i < matches[k].size(); ++i)
+            if (matches[size_t(via)][i].j == kNoMatch)
+                matches[k][i].j = kNoMatch;
+    }
     const bool with_variance = !t.variance.empty();
     const bool with_halves   = !t.half_a.empty();
     for (const FramePlanes& n : ns)

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <random>
 
@@ -294,4 +295,44 @@ TEST(Temporal, ThreadsAndRoiGiveTheWholeImagePixels)
                 ASSERT_EQ(c.radiance.getchannel(x, y, 0, ch),
                           whole.radiance.getchannel(x, y, 0, ch))
                     << x << "," << y;
+}
+
+
+// A neighbour whose flow chains another's counts only where that one
+// shows the same surface: here the nearer frame shows another object over
+// the left half, so the farther frame's pixels there (the same surface as
+// frame t's) are not used either.
+TEST(Temporal, AChainedNeighbourCountsOnlyWhereItsViaDoes)
+{
+    const int W = 32, H = 16;
+    auto frame = [&](float left_id) {
+        std::vector<float> rgb, albedo, id;
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                rgb.insert(rgb.end(), { 0.4f, 0.4f, 0.4f });
+                albedo.insert(albedo.end(), { 0.5f, 0.5f, 0.5f });
+                id.push_back(x < W / 2 ? left_id : 1.0f);
+            }
+        return std::array<ImageBuf, 3> { synth::make_image(W, H, 3, rgb),
+                                          synth::make_image(W, H, 3, albedo),
+                                          synth::make_image(W, H, 1, id) };
+    };
+    const auto t = frame(1.0f), near = frame(2.0f), far = frame(1.0f);
+    const ImageBuf zero = synth::make_image(W, H, 2, std::vector<float>(2 * W * H, 0.0f));
+    auto as_frame = [&](const std::array<ImageBuf, 3>& f) {
+        zdenoise::TemporalFrame tf;
+        tf.radiance         = &f[0];
+        tf.albedo           = &f[1];
+        tf.guides.object_id = &f[2];
+        tf.flow             = &zero;
+        return tf;
+    };
+    std::vector<zdenoise::TemporalFrame> neighbours = { as_frame(near), as_frame(far) };
+    neighbours[1].via = 0;
+    zdenoise::TemporalCombined c;
+    ASSERT_TRUE(zdenoise::temporal_combine(c, as_frame(t), neighbours));
+    EXPECT_EQ(c.frames.getchannel(4, 8, 0, 0), 1.0f) << "left: neither neighbour";
+    EXPECT_EQ(c.frames.getchannel(W - 5, 8, 0, 0), 3.0f) << "right: both";
+    neighbours[1].via = 1;  // itself
+    EXPECT_FALSE(zdenoise::temporal_combine(c, as_frame(t), neighbours));
 }

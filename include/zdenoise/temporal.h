@@ -50,6 +50,12 @@ struct TemporalFrame {
     /// nowhere. Null: the same place (a static camera and scene). Ignored
     /// for frame t itself.
     const ImageBuf* flow = nullptr;
+    /// For a neighbour whose flow chains another's (t+2 through t+1: the
+    /// index of t+1 in the neighbours), or -1: a pixel counts here only
+    /// where it shows the same surface there too, so that a chain through
+    /// an occluder (a background pixel hidden in t+1 takes the occluder's
+    /// motion there) does not land on another place of a surface.
+    int via = -1;
 };
 
 /// What temporal_combine() makes of frame t.

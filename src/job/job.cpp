@@ -482,6 +482,10 @@ combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
         neighbours.push_back(as_frame(f.radiance, f.albedo, f.normal, f.depth,
                                       f.id, f.variance, f.half_a, f.half_b));
         neighbours.back().flow = j.static_camera ? nullptr : &flows[k];
+        const int o = j.neighbour_offsets[k];
+        const size_t before = index_of(o - (o > 0 ? 1 : -1));
+        if (!j.static_camera && before != n)
+            neighbours.back().via = int(before);
     }
     TemporalOptions options;
     options.albedo_eps = j.filter.albedo_eps;
