@@ -134,8 +134,10 @@ build_pyramid_level(PyramidLevel& level, const FilterInputs& fine,
             if (!in.normal.empty())
                 for (int c = 0; c < 3; ++c)
                     in.normal[3 * b + size_t(c)] = normal[c];
-            std::memcpy(&in.ids[id_floats * b], &fine.ids[id_floats * px[0]],
-                        id_floats * sizeof(float));
+            if (id_floats)
+                std::memcpy(&in.ids[id_floats * b],
+                            &fine.ids[id_floats * px[0]],
+                            id_floats * sizeof(float));
             level.zl_sum[b]     = float(zsum);
             level.fit_points[b] = float(points);
             if (!(P > 0.0))
