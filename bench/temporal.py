@@ -53,7 +53,7 @@ def rel_mse(img, ref, mask=None):
 def to_next(path):
     """Where each pixel of the frame shows in the next frame (x right, y
     down), from Cycles' Vector pass; the convention of
-    src/job/neighbour_frames.cpp (vector_flows)."""
+    src/job/neighbour_frames.cpp (vector_flow)."""
     v = load(path, ['Vector.X', 'Vector.Y', 'Vector.Z', 'Vector.W'])
     return np.stack([-v[:, :, 2], v[:, :, 3]], axis=-1)
 

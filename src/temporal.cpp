@@ -168,6 +168,21 @@ struct Match {
     bool exact = false;
 };
 
+/// The luminance of pixel i's light z = L / (A + eps); NaN unless all
+/// three channels are demodulated.
+float
+light_luminance(const FramePlanes& f, size_t i, float eps)
+{
+    float z[3];
+    for (int c = 0; c < 3; ++c) {
+        const float a = f.albedo[3 * i + size_t(c)];
+        if (!detail::albedo_demodulated(a, eps))
+            return std::numeric_limits<float>::quiet_NaN();
+        z[c] = f.rgb[3 * i + size_t(c)] / (a + eps);
+    }
+    return detail::luminance(z);
+}
+
 /// matches[k][i] for every pixel i of t's region and neighbour k.
 std::vector<std::vector<Match>>
 match_neighbours(const FramePlanes& t, const std::vector<FramePlanes>& ns,
@@ -192,18 +207,9 @@ match_neighbours(const FramePlanes& t, const std::vector<FramePlanes>& ns,
                     continue;
                 mk[i].j     = j;
                 mk[i].exact = !f || (f[0] == 0.0f && f[1] == 0.0f);
-                float zt[3], zn[3];
-                bool both = true;
-                for (int c = 0; c < 3; ++c) {
-                    const float at = t.albedo[3 * i + size_t(c)];
-                    const float an = n.albedo[3 * j + size_t(c)];
-                    both = both && detail::albedo_demodulated(at, eps)
-                           && detail::albedo_demodulated(an, eps);
-                    zt[c] = t.rgb[3 * i + size_t(c)] / (at + eps);
-                    zn[c] = n.rgb[3 * j + size_t(c)] / (an + eps);
-                }
-                const float d = detail::luminance(zn) - detail::luminance(zt);
-                mk[i].dz = both && std::isfinite(d)
+                const float d = light_luminance(n, j, eps)
+                                - light_luminance(t, i, eps);
+                mk[i].dz = std::isfinite(d)
                                ? d
                                : std::numeric_limits<float>::quiet_NaN();
             }
@@ -241,8 +247,10 @@ same_light(const std::vector<Match>& m, const ROI& w, int x, int y, int r,
 }
 
 
+/// Does frame `f` have a radiance and an albedo, and do all its images
+/// cover its radiance's data window with the channels they need?
 bool
-check_frame_images(ImageBuf& dst, const TemporalFrame& f, const ROI& window,
+check_frame_images(ImageBuf& dst, const TemporalFrame& f,
                    const std::string& which)
 {
     if (!f.radiance || !f.albedo) {
@@ -250,6 +258,7 @@ check_frame_images(ImageBuf& dst, const TemporalFrame& f, const ROI& window,
                      f.radiance ? "albedo" : "radiance");
         return false;
     }
+    const ROI window = f.radiance->roi();
     auto check = [&](const ImageBuf* img, const char* what, int nch) {
         if (!img)
             return true;
@@ -284,24 +293,18 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
                  const std::vector<TemporalFrame>& neighbours,
                  const TemporalOptions& opt, ROI roi, int nthreads)
 {
-    if (!frame.radiance || !frame.albedo) {
-        dst.radiance.errorfmt("{}: frame t has no {}", kOp,
-                              frame.radiance ? "albedo" : "radiance");
+    if (!check_frame_images(dst.radiance, frame, "frame t"))
         return false;
-    }
     const ROI full = frame.radiance->roi();
     if (!roi.defined())
         roi = full;
     roi = roi_intersection(roi, full);
     roi.chbegin = 0;
     roi.chend   = frame.radiance->nchannels();
-    if (!check_frame_images(dst.radiance, frame, full, "frame t"))
-        return false;
     for (size_t k = 0; k < neighbours.size(); ++k) {
         const TemporalFrame& n = neighbours[k];
         const std::string which = "neighbour " + std::to_string(k);
-        if (!check_frame_images(dst.radiance, n, n.radiance ? n.radiance->roi() : full,
-                                which))
+        if (!check_frame_images(dst.radiance, n, which))
             return false;
         const ROI fw = n.flow ? n.flow->roi() : ROI();
         if (n.flow

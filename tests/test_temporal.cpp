@@ -20,27 +20,31 @@ using OIIO::ImageBuf;
 
 namespace {
 
+/// A synthetic scene as one frame of a sequence, with all its guides.
+zdenoise::TemporalFrame
+scene_frame(const synth::Scene& s)
+{
+    zdenoise::TemporalFrame f;
+    f.radiance         = &s.noisy;
+    f.albedo           = &s.albedo;
+    f.guides.normal    = &s.normal;
+    f.guides.depth     = &s.depth;
+    f.guides.object_id = &s.object_id;
+    return f;
+}
+
 /// Frame t of a static sequence denoised with K neighbours on each side
 /// (frames t-K..t+K of `frames`, each the same scene with other noise).
 ImageBuf
 denoise_static(const std::vector<synth::Scene>& frames, int t, int K,
                ImageBuf* combined_radiance = nullptr)
 {
-    auto as_frame = [](const synth::Scene& s) {
-        zdenoise::TemporalFrame f;
-        f.radiance        = &s.noisy;
-        f.albedo          = &s.albedo;
-        f.guides.normal   = &s.normal;
-        f.guides.depth    = &s.depth;
-        f.guides.object_id = &s.object_id;
-        return f;
-    };
     std::vector<zdenoise::TemporalFrame> neighbours;
     for (int k = t - K; k <= t + K; ++k)
         if (k != t && k >= 0 && k < int(frames.size()))
-            neighbours.push_back(as_frame(frames[size_t(k)]));
+            neighbours.push_back(scene_frame(frames[size_t(k)]));
     zdenoise::TemporalCombined c;
-    EXPECT_TRUE(zdenoise::temporal_combine(c, as_frame(frames[size_t(t)]),
+    EXPECT_TRUE(zdenoise::temporal_combine(c, scene_frame(frames[size_t(t)]),
                                            neighbours))
         << c.radiance.geterror();
     if (combined_radiance)
@@ -266,29 +270,21 @@ TEST(Temporal, ThreadsAndRoiGiveTheWholeImagePixels)
     std::vector<synth::Scene> frames;
     for (int seed = 1; seed <= 3; ++seed)
         frames.push_back(synth::staircase(64, 48, 8, { 8, uint32_t(200 + seed) }));
-    auto as_frame = [](const synth::Scene& s) {
-        zdenoise::TemporalFrame f;
-        f.radiance         = &s.noisy;
-        f.albedo           = &s.albedo;
-        f.guides.depth     = &s.depth;
-        f.guides.object_id = &s.object_id;
-        return f;
-    };
-    const std::vector<zdenoise::TemporalFrame> neighbours = { as_frame(frames[0]),
-                                                              as_frame(frames[2]) };
+    const std::vector<zdenoise::TemporalFrame> neighbours = { scene_frame(frames[0]),
+                                                              scene_frame(frames[2]) };
     zdenoise::TemporalCombined whole;
-    ASSERT_TRUE(zdenoise::temporal_combine(whole, as_frame(frames[1]), neighbours,
+    ASSERT_TRUE(zdenoise::temporal_combine(whole, scene_frame(frames[1]), neighbours,
                                            {}, {}, 1));
     for (int nthreads : { 2, 3 }) {
         zdenoise::TemporalCombined c;
-        ASSERT_TRUE(zdenoise::temporal_combine(c, as_frame(frames[1]), neighbours, {},
+        ASSERT_TRUE(zdenoise::temporal_combine(c, scene_frame(frames[1]), neighbours, {},
                                                {}, nthreads));
         EXPECT_TRUE(synth::same_pixels(c.radiance, whole.radiance)) << nthreads;
         EXPECT_TRUE(synth::same_pixels(c.frames, whole.frames)) << nthreads;
     }
     const OIIO::ROI part(9, 40, 7, 30, 0, 3);
     zdenoise::TemporalCombined c;
-    ASSERT_TRUE(zdenoise::temporal_combine(c, as_frame(frames[1]), neighbours, {}, part, 2));
+    ASSERT_TRUE(zdenoise::temporal_combine(c, scene_frame(frames[1]), neighbours, {}, part, 2));
     for (int y = part.ybegin; y < part.yend; ++y)
         for (int x = part.xbegin; x < part.xend; ++x)
             for (int ch = 0; ch < 3; ++ch)

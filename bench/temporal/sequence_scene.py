@@ -68,29 +68,29 @@ def link(name, data, pass_index):
     return ob
 
 
-def mesh_obj(name, verts, faces, mat, pass_index, smooth=False, location=(0, 0, 0)):
-    me = bpy.data.meshes.new(name)
-    me.from_pydata([tuple(v) for v in verts], [], [tuple(f) for f in faces])
-    me.validate()
-    me.update()
+def mesh_object(name, me, mat, pass_index, smooth, location):
+    """Link mesh `me` as object `name` with its material, shading and place."""
     for poly in me.polygons:
         poly.use_smooth = smooth
     me.materials.append(mat)
     ob = link(name, me, pass_index)
     ob.location = location
     return ob
+
+
+def mesh_obj(name, verts, faces, mat, pass_index, smooth=False, location=(0, 0, 0)):
+    me = bpy.data.meshes.new(name)
+    me.from_pydata([tuple(v) for v in verts], [], [tuple(f) for f in faces])
+    me.validate()
+    me.update()
+    return mesh_object(name, me, mat, pass_index, smooth, location)
 
 
 def bm_obj(name, bm, mat, pass_index, smooth, location):
     me = bpy.data.meshes.new(name)
     bm.to_mesh(me)
     bm.free()
-    for poly in me.polygons:
-        poly.use_smooth = smooth
-    me.materials.append(mat)
-    ob = link(name, me, pass_index)
-    ob.location = location
-    return ob
+    return mesh_object(name, me, mat, pass_index, smooth, location)
 
 
 class Mat:

@@ -137,6 +137,25 @@ log_mode(const Job& j, const Convention& conv, const Plan& p,
 }
 
 
+/// What --temporal combines frames with: the library's defaults, at the
+/// filter's albedo_eps.
+TemporalOptions
+temporal_options(const Job& j)
+{
+    TemporalOptions o;
+    o.albedo_eps = j.filter.albedo_eps;
+    return o;
+}
+
+/// Rows frame t is read with beyond what the filter reads: with
+/// --temporal, the light test's box.
+int
+temporal_reach(const Job& j)
+{
+    return j.temporal > 0 ? temporal_options(j).test_radius : 0;
+}
+
+
 /// Read the headers of job `j` (its convention's defaults applied) and
 /// decide everything: roles, colour, layers, output, strips. Fails before
 /// any pixel is read. Ends with the sink begun.
@@ -318,7 +337,7 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
         // neighbour's roles (as floats, over about as many rows as the
         // strip: the rows its flow reaches), its flow and the combined
         // images.
-        cost.around += TemporalOptions().test_radius;
+        cost.around += temporal_reach(j);
         double role_floats = double(p.roles.radiance.indices.size()
                                     + p.roles.albedo.indices.size());
         for (const OptionalRole* o : p.roles.optional())
@@ -348,7 +367,7 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
 }
 
 
-/// Convert a role image of `arg`'s file between colour spaces (when it is
+/// Convert an image of `arg`'s file between colour spaces (when it is
 /// there and the job manages colour).
 void
 convert_role(const Plan& p, ImageBuf& image, const std::string& from,
@@ -372,10 +391,10 @@ void
 combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
                    const Strip& strip, RoleImages& img, JobResult& result)
 {
-    const TemporalOptions defaults;
+    const TemporalOptions options = temporal_options(j);
     const int halo     = filter_halo(j.filter);
     const ROI region   = strip.widened(halo);
-    const ROI around   = strip.widened(halo + defaults.test_radius);
+    const ROI around   = strip.widened(halo + options.test_radius);
     auto crop = [&](ImageBuf& b, const ROI& to) {
         if (!b.initialized() || b.roi() == to)
             return;
@@ -418,9 +437,7 @@ combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
             const size_t before = index_of(o - dir);
             const ImageBuf& vectors = before == n ? img.motion
                                                   : frames[before].motion;
-            ImageBuf to_previous, to_next;
-            vector_flows(vectors, to_previous, to_next, j.threads);
-            ImageBuf& step = dir > 0 ? to_next : to_previous;
+            ImageBuf step = vector_flow(vectors, dir, j.threads);
             if (before == n) {
                 flows[k] = std::move(step);
             } else if (!chain_flow(flows[k], flows[before], step, {}, j.threads)) {
@@ -487,8 +504,6 @@ combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
         if (!j.static_camera && before != n)
             neighbours.back().via = int(before);
     }
-    TemporalOptions options;
-    options.albedo_eps = j.filter.albedo_eps;
     TemporalCombined c;
     if (!temporal_combine(c, t, neighbours, options, region, j.threads))
         fail(format("--temporal: {}", one_line(c.radiance.geterror())));
@@ -549,25 +564,17 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
     img.half_b   = read(roles.half_b);
     img.remodulation = read(roles.remodulation);
     img.motion       = read(roles.motion);
-    auto convert = [&](ImageBuf& image, const std::string& from,
-                       const std::string& to, const InputArg& arg) {
-        std::string err;
-        if (image.initialized() && !p.config.convert_rgb(image, from, to, err))
-            fail(format("'{}': {}", arg.path, one_line(err)));
-    };
-    if (p.managed) {
-        convert(img.radiance, p.spaces.input, p.spaces.working, j.in);
-        convert(img.albedo, p.spaces.albedo, p.spaces.working, j.albedo);
-        convert(img.remodulation, p.spaces.albedo, p.spaces.working, j.aux);
-        convert(img.half_a, p.spaces.input, p.spaces.working, j.half_a);
-        convert(img.half_b, p.spaces.input, p.spaces.working, j.half_b);
-    }
+    convert_role(p, img.radiance, p.spaces.input, p.spaces.working, j.in);
+    convert_role(p, img.albedo, p.spaces.albedo, p.spaces.working, j.albedo);
+    convert_role(p, img.remodulation, p.spaces.albedo, p.spaces.working, j.aux);
+    convert_role(p, img.half_a, p.spaces.input, p.spaces.working, j.half_a);
+    convert_role(p, img.half_b, p.spaces.input, p.spaces.working, j.half_b);
     if (p.albedo_samples) {
         // Over what the filter reads: the strip and its halo (and with
         // --temporal, the light test's box around it).
         ImageBuf clean;
         const int reads = filter_halo(j.filter)
-                          + (j.temporal > 0 ? TemporalOptions().test_radius : 0);
+                          + temporal_reach(j);
         if (!prefilter_albedo(clean, img.albedo, p.albedo_samples,
                               strip.widened(reads), j.threads))
             fail(format("'{}': {}", j.albedo.path, one_line(clean.geterror())));
@@ -624,8 +631,7 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
         layer_stats[i].merge(loaded.stats[i]);
 
     Timer write_timer;
-    if (p.managed)
-        convert(denoised, p.spaces.working, p.spaces.output, j.in);
+    convert_role(p, denoised, p.spaces.working, p.spaces.output, j.in);
     std::vector<const ImageBuf*> images = { &denoised };
     for (const ImageBuf& l : loaded.denoised)
         images.push_back(&l);

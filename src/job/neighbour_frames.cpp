@@ -105,13 +105,19 @@ rows_reached(const ImageBuf* flow, const ROI& over, const ROI& frame)
     ROI rows(frame.xbegin, frame.xend, over.ybegin, over.yend);
     if (!flow)
         return rows;
+    ROI ys  = over;
+    ys.chbegin = 1;
+    ys.chend   = 2;
+    std::vector<float> fy(ys.npixels());
+    flow->get_pixels(ys, TypeFloat, fy.data());
     int lo = frame.yend, hi = frame.ybegin - 1;
     for (int y = over.ybegin; y < over.yend; ++y)
-        for (int x = over.xbegin; x < over.xend; ++x) {
-            const float fy = flow->getchannel(x, y, 0, 1);
-            if (!std::isfinite(fy) || std::fabs(fy) > 1e8f)
+        for (size_t i = size_t(y - over.ybegin) * size_t(over.width()),
+                    e = i + size_t(over.width());
+             i < e; ++i) {
+            if (!std::isfinite(fy[i]) || std::fabs(fy[i]) > 1e8f)
                 continue;
-            const int q = int(std::floor(float(y) + 0.5f + fy));
+            const int q = int(std::floor(float(y) + 0.5f + fy[i]));
             lo = std::min(lo, q);
             hi = std::max(hi, q);
         }
@@ -124,35 +130,29 @@ rows_reached(const ImageBuf* flow, const ROI& over, const ROI& frame)
 }
 
 
-void
-vector_flows(const ImageBuf& vectors, ImageBuf& to_previous, ImageBuf& to_next,
-             int threads)
+ImageBuf
+vector_flow(const ImageBuf& vectors, int direction, int threads)
 {
     const ROI roi = vectors.roi();
     ImageSpec spec(roi.width(), roi.height(), 2, TypeDesc::FLOAT);
     spec.x = roi.xbegin;
     spec.y = roi.ybegin;
-    to_previous.reset(spec);
-    to_next.reset(spec);
+    ImageBuf flow(spec);
+    // Cycles (bench/temporal/README.md, verified on renders): pixel (x, y)
+    // is at (x + X, y - Y) in the previous frame and (x - Z, y + W) in the
+    // next. Two channels: the motion since the previous frame, y up.
     const bool cycles = vectors.nchannels() >= 4;
+    const int c0      = cycles && direction > 0 ? 2 : 0;
+    const float sx    = cycles ? (direction > 0 ? -1.0f : 1.0f) : float(direction);
+    const float sy    = -sx;
     ImageBufAlgo::parallel_image(roi, detail::paropt_any_length(threads), [&](ROI r) {
         for (ImageBuf::ConstIterator<float> v(vectors, r); !v.done(); ++v) {
-            float* p = static_cast<float*>(to_previous.pixeladdr(v.x(), v.y()));
-            float* n = static_cast<float*>(to_next.pixeladdr(v.x(), v.y()));
-            // CYCLES_VECTOR_CONVENTION (docs/TEMPORAL.md "Motion vectors")
-            if (cycles) {
-                p[0] = v[0];
-                p[1] = -v[1];
-                n[0] = -v[2];
-                n[1] = v[3];
-            } else {
-                p[0] = -v[0];
-                p[1] = v[1];
-                n[0] = v[0];
-                n[1] = -v[1];
-            }
+            float* f = static_cast<float*>(flow.pixeladdr(v.x(), v.y()));
+            f[0]     = sx * v[c0];
+            f[1]     = sy * v[c0 + 1];
         }
     });
+    return flow;
 }
 
 }  // namespace job

@@ -40,14 +40,14 @@ OIIO::ROI
 rows_reached(const OIIO::ImageBuf* flow, const OIIO::ROI& over,
              const OIIO::ROI& frame);
 
-/// Where each pixel of a frame shows in the previous and in the next
-/// frame (temporal_combine()'s flows: offsets in pixels, x right, y down
-/// the rows), from its motion vectors as the renderer wrote them: Cycles'
-/// Vector pass (4 channels) or 2 channels of the motion since the previous
-/// frame (Arnold's motionvector; the next frame assumed to continue it).
-void
-vector_flows(const OIIO::ImageBuf& vectors, OIIO::ImageBuf& to_previous,
-             OIIO::ImageBuf& to_next, int threads);
+/// Where each pixel of a frame shows in the next frame (`direction` 1) or
+/// in the previous one (-1): temporal_combine()'s flow, offsets in pixels,
+/// x right, y down the rows. From the frame's motion vectors as the
+/// renderer wrote them: Cycles' Vector pass (4 channels) or 2 channels of
+/// the motion since the previous frame (Arnold's motionvector; the next
+/// frame assumed to continue it).
+OIIO::ImageBuf
+vector_flow(const OIIO::ImageBuf& vectors, int direction, int threads);
 
 }  // namespace job
 }  // namespace zdenoise
