@@ -634,3 +634,66 @@ TEST_F(PluginTest, RecipeDiagnosticsAddTheMapsAsTheCommandDoes)
                            "zdenoise.error" })
         EXPECT_NE(std::find(names.begin(), names.end(), n), names.end()) << n;
 }
+
+
+// --temporal in a recipe (docs/TEMPORAL.md): the recipe keeps the patterned
+// inputs, its "frame" and the shot's range; read, it is the frame the
+// sequence run writes, neighbours included. "?frame=N" reads another frame.
+TEST_F(PluginTest, TemporalRecipeReadsTheFrameWithItsNeighbours)
+{
+    // Three frames of a static shot, each with noise of its own on the
+    // beauty (the guides the same), so that the neighbours count.
+    auto sample = ImageInput::open(kSample);
+    ASSERT_TRUE(sample);
+    const std::vector<std::string> names = sample->spec().channelnames;
+    std::string beauty, rest;
+    for (size_t c = 0; c < names.size(); ++c)
+        (c < 3 ? beauty : rest) += (c == 0 || c == 3 ? "" : ",") + names[c];
+    const std::string beauty_channels = beauty, other_channels = rest;
+    for (int f : { 1, 2, 3 }) {
+        RunResult r = oiiotool(
+            quoted(kSample) + " --ch " + quoted(beauty_channels)
+            + " --noise:type=uniform:min=0:max=0.05:seed=" + std::to_string(f) + " "
+            + quoted(kSample) + " --ch " + quoted(other_channels) + " --chappend -o "
+            + quoted(path("shot.000" + std::to_string(f) + ".exr")));
+        ASSERT_EQ(r.status, 0) << r.err;
+    }
+    const std::string in = "--in " + quoted(path("shot.#.exr"))
+                           + " --temporal 1 --static-camera --threads 1";
+    RunResult r = zdenoise(in + " --frames 1-3 -o " + quoted(path("cli.#.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    r = zdenoise("--in " + quoted(path("shot.0002.exr")) + " -o " + quoted(path("alone.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+
+    r = zdenoise(in + " --frames 2 --shot-range 1-3 --write-recipe " + quoted(path("shot.zdn")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    const std::string recipe = slurp(path("shot.zdn"));
+    for (const char* line : { "\"path\": \"shot.#.exr\"", "\"temporal\": 1",
+                              "\"static-camera\": true", "\"frame\": \"2\"",
+                              "\"shot-range\": \"1-3\"" })
+        EXPECT_NE(recipe.find(line), std::string::npos) << line << " in\n" << recipe;
+    r = oiiotool(quoted(path("shot.zdn")) + " -o " + quoted(path("plugin.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    expect_identical(path("cli.0002.exr"), path("plugin.exr"));
+    ImageBuf alone(path("alone.exr")), plugin(path("plugin.exr"));
+    EXPECT_GT(ImageBufAlgo::compare(alone, plugin, 0.0f, 0.0f).maxerror, 0.0)
+        << "the neighbours count";
+    r = oiiotool(quoted(path("shot.zdn") + "?frame=3") + " -o " + quoted(path("plugin3.exr")));
+    ASSERT_EQ(r.status, 0) << r.err;
+    expect_identical(path("cli.0003.exr"), path("plugin3.exr"));
+
+    // What a recipe of one frame cannot be.
+    r = zdenoise(in + " --frames 2 --write-recipe " + quoted(path("no_shot.zdn")));
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("--temporal needs --shot-range"), std::string::npos) << r.err;
+    r = zdenoise(in + " --frames 1-3 --shot-range 1-3 --write-recipe " + quoted(path("x.zdn")));
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("need --frames of one frame"), std::string::npos) << r.err;
+    write_text("bad.zdn", "{\"zdenoise-recipe\": 1, \"in\": \"shot.#.exr\", \"temporal\": 1, "
+                          "\"static-camera\": true, \"frame\": \"2\"}");
+    r = oiiotool(quoted(path("bad.zdn")) + " -o " + quoted(path("bad.exr")));
+    EXPECT_NE(r.status, 0);
+    EXPECT_NE(r.err.find("\"temporal\" needs \"shot-range\""), std::string::npos) << r.err;
+    r = oiiotool(quoted(path("shot.zdn") + "?frame=4") + " -o " + quoted(path("bad.exr")));
+    EXPECT_NE(r.status, 0) << "frame 4 lies beyond the shot";
+}

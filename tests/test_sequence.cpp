@@ -386,3 +386,37 @@ TEST_F(Sequence, TemporalStripsEqualTheWholeFrame)
                                 path(std::string("strips.") + f + ".exr")))
             << f;
 }
+
+
+// A farm chunk (--frames 2) of a shot (--shot-range 1-3) takes the frames
+// around the chunk as neighbours: frame 2 comes out as the whole shot's run
+// writes it. Without --shot-range the chunk bounds them.
+TEST_F(Sequence, ShotRangeGivesAChunkTheFramesAroundIt)
+{
+    write_frames({ 1, 2, 3 });
+    // Each run writes its own files: an image read before is cached by name.
+    const std::string args = "--in " + path("noisy.#.exr") + " --albedo "
+                             + path("albedo.#.exr") + " --temporal 1 --static-camera";
+    RunResult whole = zdenoise(args + " --frames 1-3 -o " + path("whole.#.exr"));
+    ASSERT_EQ(whole.status, 0) << whole.err;
+    RunResult chunk = zdenoise(args + " --frames 2 --shot-range 1-3 -v -o "
+                               + path("chunk.#.exr"));
+    ASSERT_EQ(chunk.status, 0) << chunk.err;
+    EXPECT_NE(chunk.out.find("temporal  frames -1,+1 around this one"), std::string::npos)
+        << chunk.out;
+    EXPECT_TRUE(same_pixels(path("chunk.0002.exr"), path("whole.0002.exr")));
+    RunResult bounded = zdenoise(args + " --frames 2 -o " + path("bounded.#.exr"));
+    ASSERT_EQ(bounded.status, 0) << bounded.err;
+    EXPECT_FALSE(same_pixels(path("bounded.0002.exr"), path("whole.0002.exr")))
+        << "without --shot-range the chunk is the whole sequence";
+
+    RunResult r = zdenoise(args + " --frames 2-4 --shot-range 1-3 -o " + path("out.#.exr"));
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("--shot-range 1-3 does not hold frame 4 of --frames"),
+              std::string::npos)
+        << r.err;
+    r = zdenoise(args + " --frames 2 --shot-range 1-x -o " + path("out.#.exr"));
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("--shot-range: '1-x' is not a frame list"), std::string::npos)
+        << r.err;
+}

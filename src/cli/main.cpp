@@ -28,6 +28,7 @@
 #include <zdenoise/zdenoise.h>
 
 #include "../job/atomic_write.h"
+#include "../job/frames.h"
 #include "../job/job.h"
 #include "../job/options.h"
 #include "../job/recipe.h"
@@ -259,15 +260,32 @@ run(int argc, char* argv[])
     batch.print_chunks  = a.print_chunks;
     batch.verbose       = a.verbose;
     batch.force         = a.force;
-    if (!a.recipe.empty() && cli::is_batch(a.job, a.recipe, batch))
-        fail("--write-recipe writes the recipe of one image: no frame "
-             "patterns, --frames or batch options",
-             kExitUsage);
-    if (!a.recipe.empty() && a.job.temporal > 0)
-        fail("--temporal is not a recipe option: a recipe is one frame "
-             "(docs/TEMPORAL.md)",
-             kExitUsage);
     if (!a.recipe.empty()) {
+        // A recipe is one image: at most one frame (--frames N) of
+        // patterned inputs, which it keeps with the frame's number.
+        const bool patterned = job::job_has_frame_pattern(a.job);
+        std::vector<int> frames;
+        std::string why;
+        if (job::has_frame_pattern(a.recipe))
+            why = "its name has no frame pattern";
+        else if (!a.report.empty() || a.fail_fast || a.skip_existing
+                 || a.print_chunks > 0)
+            why = "no batch options (--report, --fail-fast, --skip-existing, "
+                  "--print-chunks)";
+        else if (patterned
+                 && (!job::parse_frame_list(a.frames, frames)
+                     || frames.size() != 1))
+            why = "inputs with a frame pattern need --frames of one frame";
+        else if (!patterned && (!a.frames.empty() || !a.job.shot_range.empty()))
+            why = "--frames and --shot-range need inputs with a frame "
+                  "pattern (shot.#.exr)";
+        else if (a.job.temporal > 0 && a.job.shot_range.empty())
+            why = "--temporal needs --shot-range, the shot's frames that the "
+                  "neighbours lie within";
+        if (!why.empty())
+            fail("--write-recipe writes the recipe of one image: " + why,
+                 kExitUsage);
+        a.job.frame = a.frames;
         if (!job::write_recipe(a.job, a.preset, a.recipe, err))
             fail(err);
         if (a.verbose)

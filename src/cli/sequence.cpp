@@ -203,23 +203,6 @@ write_report(const std::string& path, const job::Job& job,
     return job::write_text_atomically(path, text, error);
 }
 
-/// Frame `frame`'s job; with --temporal K, with the jobs of frames
-/// frame-K .. frame+K that lie within the sequence's first and last frames
-/// (the first and last frames use the neighbours they have; a neighbour
-/// within them whose file is missing fails the frame, naming it).
-job::Job
-frame_job(const job::Job& job, int frame, const std::vector<int>& frames)
-{
-    job::Job j = job::job_for_frame(job, frame);
-    const auto [first, last] = std::minmax_element(frames.begin(), frames.end());
-    for (int k = -job.temporal; k <= job.temporal; ++k)
-        if (k != 0 && frame + k >= *first && frame + k <= *last) {
-            j.neighbours.push_back(job::job_for_frame(job, frame + k));
-            j.neighbour_offsets.push_back(k);
-        }
-    return j;
-}
-
 }  // namespace
 
 
@@ -229,7 +212,7 @@ is_batch(const job::Job& job, const std::string& output,
 {
     return job::job_has_frame_pattern(job) || job::has_frame_pattern(output)
            || !o.frames.empty() || !o.report.empty() || o.skip_existing
-           || o.fail_fast || o.print_chunks > 0;
+           || o.fail_fast || o.print_chunks > 0 || !job.shot_range.empty();
 }
 
 
@@ -269,10 +252,37 @@ run_batch(const job::Job& job, const std::string& output,
                            job.diagnostics_png);
             return kExitUsage;
         }
-    } else if (!o.frames.empty() || o.print_chunks > 0) {
-        error = "--frames needs a frame pattern (#, @ or %0Nd) in the input "
-                "and output names, e.g. --in shot.#.exr -o clean.#.exr";
+    } else if (!o.frames.empty() || o.print_chunks > 0
+               || !job.shot_range.empty()) {
+        error = format("{} needs a frame pattern (#, @ or %0Nd) in the "
+                       "input and output names, e.g. --in shot.#.exr -o "
+                       "clean.#.exr",
+                       !o.frames.empty()       ? "--frames"
+                       : o.print_chunks > 0    ? "--print-chunks"
+                                               : "--shot-range");
         return kExitUsage;
+    }
+    // The shot the neighbours of --temporal lie in: a farm chunk's
+    // --frames is part of it.
+    int first = 0, last = 0;
+    if (sequence) {
+        first = *std::min_element(frames.begin(), frames.end());
+        last  = *std::max_element(frames.begin(), frames.end());
+    }
+    if (sequence && !job.shot_range.empty()) {
+        if (!job::frame_bounds(job.shot_range, first, last)) {
+            error = format("--shot-range: '{}' is not a frame list (e.g. "
+                           "1001-1100)",
+                           job.shot_range);
+            return kExitUsage;
+        }
+        for (int f : frames)
+            if (f < first || f > last) {
+                error = format("--shot-range {} does not hold frame {} of "
+                               "--frames",
+                               job.shot_range, f);
+                return kExitUsage;
+            }
     }
     if (o.print_chunks > 0) {
         for (const std::string& chunk : job::frame_chunks(frames,
@@ -331,7 +341,7 @@ run_batch(const job::Job& job, const std::string& output,
                           finished ? work_seconds / double(finished)
                                          * double(left)
                                    : 0.0);
-        run_frame(sequence ? frame_job(job, r.frame, frames) : job, r, o);
+        run_frame(sequence ? job::job_with_neighbours(job, r.frame, first, last) : job, r, o);
         work_seconds += r.seconds;
         if (r.status == FrameRecord::Status::Failed) {
             ++failed;

@@ -3,6 +3,7 @@
 
 #include "frames.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -210,6 +211,32 @@ job_has_frame_pattern(const Job& job, std::string* frames_in_name)
         if ((job.*m).given && has_frame_pattern((job.*m).path, frames_in_name))
             any = true;
     return any;
+}
+
+
+Job
+job_with_neighbours(const Job& job, int frame, int first, int last)
+{
+    Job j = job_for_frame(job, frame);
+    for (int k = -job.temporal; k <= job.temporal; ++k)
+        if (k != 0 && int64_t(frame) + k >= first && int64_t(frame) + k <= last) {
+            j.neighbours.push_back(job_for_frame(job, frame + k));
+            j.neighbour_offsets.push_back(k);
+        }
+    return j;
+}
+
+
+bool
+frame_bounds(const std::string& list, int& first, int& last)
+{
+    std::vector<int> frames;
+    if (!parse_frame_list(list, frames))
+        return false;
+    const auto [lo, hi] = std::minmax_element(frames.begin(), frames.end());
+    first = *lo;
+    last  = *hi;
+    return true;
 }
 
 

@@ -64,5 +64,16 @@ unmatched_frame_pattern(const Job& job, const std::vector<int>& frames);
 Job
 job_for_frame(const Job& job, int frame);
 
+/// job_for_frame(); with job.temporal K, with the jobs of frames frame-K ..
+/// frame+K that lie within first .. last (the shot) as its neighbours: the
+/// first and last frames use the neighbours they have, and a neighbour
+/// within the shot whose file is missing fails the frame, naming it.
+Job
+job_with_neighbours(const Job& job, int frame, int first, int last);
+
+/// The first and last frame of frame list `list` (--shot-range), or false.
+bool
+frame_bounds(const std::string& list, int& first, int& last);
+
 }  // namespace job
 }  // namespace zdenoise

@@ -109,9 +109,16 @@ struct Job {
     /// The motion vectors (--motion; default: the --in file's by its
     /// convention).
     InputArg motion;
+    /// The shot's frames (--shot-range, a frame list): with temporal, the
+    /// neighbours lie within its first and last. Empty: a batch's --frames.
+    std::string shot_range;
+    /// A recipe's frame (its "frame", one frame of the --frames notation):
+    /// the frame its patterned inputs (shot.#.exr) are read at. Empty: the
+    /// inputs name files. read_recipe() resolves it (job_with_neighbours()).
+    std::string frame;
     /// With temporal: the jobs of the neighbouring frames (their inputs'
     /// paths; the rest as this job's), and each one's frame offset.
-    /// The batch fills them (src/cli/sequence.cpp).
+    /// job_with_neighbours() fills them.
     std::vector<Job> neighbours;
     std::vector<int> neighbour_offsets;
 };

@@ -124,6 +124,7 @@ Frame sequences (oiiotool's conventions) and batches:
 {--temporal}
 {--static-camera}
 {--motion}
+{--shot-range}
 {--skip-existing}
 {--fail-fast}
 {--report}
@@ -322,15 +323,15 @@ options()
           "(share/zdn-format.md)." },
         { Kind::Flag, "--force", nullptr, FIELD(force), "",
           "Allow the output to replace one of the inputs." },
-        { Kind::Whole, "--temporal", nullptr, FIELD(job.temporal), "K",
+        { Kind::Whole, "--temporal", "temporal", FIELD(job.temporal), "K",
           "Denoise each frame with frames t-K..t+K as extra\n"
           "evidence: their light, reprojected through the motion\n"
           "vectors, counts where the guides agree (0; a frame\n"
           "sequence; docs/TEMPORAL.md)" },
-        { Kind::Flag, "--static-camera", nullptr, FIELD(job.static_camera), "",
+        { Kind::Flag, "--static-camera", "static-camera", FIELD(job.static_camera), "",
           "With --temporal: the camera and the scene do not\n"
           "move, so no motion vectors are needed." },
-        { Kind::Input, "--motion", nullptr, FIELD(job.motion), "FILE",
+        { Kind::Input, "--motion", "motion", FIELD(job.motion), "FILE",
           "Motion vectors for --temporal (default: a Cycles\n"
           "file's Vector pass, Arnold's motionvector)." },
         { Kind::Text, "--frames", nullptr, FIELD(frames), "LIST",
@@ -338,6 +339,13 @@ options()
           "1,5,10-20; any FILE (and -o) may then name a frame\n"
           "pattern: shot.#.exr (4 digits), shot.@@@.exr (one\n"
           "digit per @), shot.%04d.exr." },
+        // A recipe's one frame of patterned inputs; the command line's is
+        // --frames (docs: share/zdn-format.md).
+        { Kind::Text, nullptr, "frame", FIELD(job.frame), "" },
+        { Kind::Text, "--shot-range", "shot-range", FIELD(job.shot_range), "LIST",
+          "With --temporal: the shot's frames (default: --frames).\n"
+          "Neighbours lie within its first and last, so a farm\n"
+          "chunk's frames use the frames around the chunk." },
         { Kind::Flag, "--skip-existing", nullptr, FIELD(skip_existing), "",
           "Leave frames whose output exists (re-runs)." },
         { Kind::Flag, "--fail-fast", nullptr, FIELD(fail_fast), "",

@@ -49,6 +49,7 @@ count_ok(Role role, size_t n)
     case Role::Depth: return n == 1;
     case Role::Variance: return n == 1 || n == 3;
     case Role::ObjectId: return n == 1 || (n >= 2 && n % 2 == 0);
+    case Role::Motion: return n == 2 || n == 4;
     }
     return false;
 }
@@ -89,7 +90,7 @@ LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
 {
     if (size < 1)
         return 0;
-    const Role role = Role(data[0] % 7);
+    const Role role = Role(data[0] % 8);
     std::vector<std::string> lines(1);
     for (size_t i = 1; i < size; ++i) {
         if (data[i] == '\n' || data[i] == '\0')
