@@ -10,10 +10,16 @@ camera and a moving sphere):
   flicker   mean over pixels and RGB of the squared difference of consecutive
             output frames (the pan: frame 4 against frame 5 at the place the
             reference's vectors take each pixel, on pixels visible in both),
-            for single-frame and temporal; the pan's also divided by the same
-            for the 1024-spp references of frames 4 and 5, and the same on
-            the light (radiance over the references' albedo), where the
-            nearest pixel's misregistration of texture cancels;
+            for single-frame and temporal. For the pan the same quantity of
+            the two 1024-spp references ("a perfect output") is the floor:
+            the scene's own change and the nearest pixel's misregistration
+            of texture are in every output's flicker;
+  error flicker
+            the same of the output's error e = output - reference, the
+            residue that changes from frame to frame (on the static sequence
+            it equals the flicker: the reference is one image). Also of the
+            error's means over 5x5 and 11x11 boxes, the low-frequency residue
+            that a viewer sees as boiling;
   relMSE    of the middle frame (4) against its high-sample reference;
   ghost     relMSE of frame 4 on the pixels disoccluded since frame 3 or
             until frame 5 (by the reference's vectors and object ids).
@@ -48,6 +54,20 @@ def rel_mse(img, ref, mask=None):
     if mask is not None:
         e = e[mask]
     return float(np.mean(e))
+
+
+def box_mean(img, r):
+    """The mean over the (2r+1)^2 box around each pixel (edges clamped)."""
+    if r == 0:
+        return img
+    p = np.pad(img, ((r, r), (r, r), (0, 0)), mode='edge')
+    c = np.cumsum(np.cumsum(p, axis=0), axis=1)
+    c = np.pad(c, ((1, 0), (1, 0), (0, 0)))
+    n = 2 * r + 1
+    return (c[n:, n:] - c[:-n, n:] - c[n:, :-n] + c[:-n, :-n]) / (n * n)
+
+
+SCALES = (0, 2, 5)  # error flicker of pixels, 5x5 and 11x11 box means
 
 
 def to_next(path):
@@ -98,11 +118,11 @@ def main():
     a = ap.parse_args()
     first, last = (int(x) for x in a.frames.split('-'))
     out = tempfile.mkdtemp(prefix='zdenoise_temporal_bench_')
-    print('| sequence | flicker single | flicker K=%d | ratio | flicker / references\' '
-          '(single, K=%d) | light flicker ratio | light flicker / references\' (single, K=%d) '
+    print('| sequence | flicker single | K=%d | ratio | a perfect output\'s ratio '
+          '| error flicker single | K=%d | ratio: pixels, 5x5, 11x11 '
           '| relMSE frame 4 single | K=%d | ghost relMSE single | K=%d |'
-          % (a.k, a.k, a.k, a.k, a.k))
-    print('|---|---|---|---|---|---|---|---|---|---|---|')
+          % (a.k, a.k, a.k, a.k))
+    print('|---|---|---|---|---|---|---|---|---|---|---|---|')
     for seq in ('static', 'pan'):
         pattern = os.path.join(a.dir, seq + '.#.exr')
         single = os.path.join(out, seq + '_single.#.exr')
@@ -114,56 +134,55 @@ def main():
         frame = lambda p, f: p.replace('#', '%04d' % f)
         ref4 = os.path.join(a.dir, seq + '_ref.0004.exr')
         ref5 = os.path.join(a.dir, seq + '_ref.0005.exr')
+        r4 = rgb(ref4)
+        if seq == 'static':
+            # Consecutive pairs; the reference is the same image for all.
+            pairs = [(f, f + 1) for f in range(first, last)]
+            refs = {f: r4 for f in range(first, last + 1)}
+            qy, qx = np.mgrid[0:r4.shape[0], 0:r4.shape[1]]
+            same = np.ones(r4.shape[:2], bool)
+            ghost_mask = None
+        else:
+            pairs = [(4, 5)]
+            refs = {4: r4, 5: rgb(ref5)}
+            ids4 = load(ref4, ['IndexOB.X'])[:, :, 0]
+            ids5 = load(ref5, ['IndexOB.X'])[:, :, 0]
+            dep4 = load(ref4, ['Denoising Depth.Z'])[:, :, 0]
+            dep5 = load(ref5, ['Denoising Depth.Z'])[:, :, 0]
+            qy, qx, same = correspondence(to_next(ref4), ids4, ids5, dep4, dep5)
+            # Disoccluded: frame 4's pixels not seen in frame 3 or 5 (frame
+            # 3's own vectors and ids: the references have only 4 and 5).
+            f3 = frame(pattern, 3)
+            ids3 = load(f3, ['IndexOB.X'])[:, :, 0]
+            dep3 = load(f3, ['Denoising Depth.Z'])[:, :, 0]
+            _, _, seen3 = correspondence(to_previous(ref4), ids4, ids3, dep4, dep3)
+            ghost_mask = ~(seen3 & same)
+
+        def flicker(img):
+            """Mean squared change from frame f to f+1 at the reprojected
+            place, over the pairs."""
+            return float(np.mean([np.mean(((img(g)[qy, qx] - img(f)) ** 2)[same])
+                                  for f, g in pairs]))
+
         row = {}
+        if seq == 'pan':
+            row['perfect'] = flicker(lambda f: refs[f])
         for name, p in (('single', single), ('k', temporal)):
             outs = {f: rgb(frame(p, f)) for f in range(first, last + 1)}
-            if seq == 'static':
-                d = [np.mean((outs[f + 1] - outs[f]) ** 2) for f in range(first, last)]
-                row[name + '_flicker'] = float(np.mean(d))
-                row[name + '_norm'] = float('nan')
-                row[name + '_light'] = row[name + '_light_norm'] = float('nan')
-                ghost_mask = None
-            else:
-                ids4 = load(ref4, ['IndexOB.X'])[:, :, 0]
-                ids5 = load(ref5, ['IndexOB.X'])[:, :, 0]
-                dep4 = load(ref4, ['Denoising Depth.Z'])[:, :, 0]
-                dep5 = load(ref5, ['Denoising Depth.Z'])[:, :, 0]
-                qy, qx, same = correspondence(to_next(ref4), ids4, ids5, dep4, dep5)
-                d = (outs[5][qy, qx] - outs[4]) ** 2
-                r4, r5 = rgb(ref4), rgb(ref5)
-                dref = (r5[qy, qx] - r4) ** 2
-                row[name + '_flicker'] = float(np.mean(d[same]))
-                row[name + '_norm'] = float(np.mean(d[same]) / np.mean(dref[same]))
-                # The same on the light (divided by the references' albedo):
-                # the texture's half-pixel misregistration under the nearest
-                # pixel, which dominates the radiance's, cancels there.
-                alb = ['Denoising Albedo.R', 'Denoising Albedo.G', 'Denoising Albedo.B']
-                a4 = load(ref4, alb) + 1e-3
-                a5 = load(ref5, alb)[qy, qx] + 1e-3
-                dl = (outs[5][qy, qx] / a5 - outs[4] / a4) ** 2
-                dlref = (r5[qy, qx] / a5 - r4 / a4) ** 2
-                row[name + '_light'] = float(np.mean(dl[same]))
-                row[name + '_light_norm'] = float(np.mean(dl[same]) / np.mean(dlref[same]))
-                # Disoccluded: frame 4's pixels not seen in frame 3 or 5 (the
-                # noisy frames' own vectors and ids: the references have
-                # only frames 4 and 5).
-                f3 = frame(pattern, 3)
-                ids3 = load(f3, ['IndexOB.X'])[:, :, 0]
-                dep3 = load(f3, ['Denoising Depth.Z'])[:, :, 0]
-                _, _, seen3 = correspondence(to_previous(ref4), ids4, ids3, dep4, dep3)
-                ghost_mask = ~(seen3 & same)
-            row[name + '_rel'] = rel_mse(outs[4], rgb(ref4))
-            row[name + '_ghost'] = (rel_mse(outs[4], rgb(ref4), ghost_mask)
-                                    if ghost_mask is not None and ghost_mask.any()
-                                    else float('nan'))
-        print('| %s | %.3g | %.3g | %.2f | %.2f, %.2f | %.2f | %.2f, %.2f | %.5f | %.5f | %s | %s |' % (
-            seq, row['single_flicker'], row['k_flicker'],
-            row['k_flicker'] / row['single_flicker'], row['single_norm'], row['k_norm'],
-            row['k_light'] / row['single_light'], row['single_light_norm'],
-            row['k_light_norm'],
+            row[name] = flicker(lambda f: outs[f])
+            row[name + '_error'] = [
+                flicker(lambda f: box_mean(outs[f] - refs[f], r)) for r in SCALES]
+            row[name + '_rel'] = rel_mse(outs[4], r4)
+            row[name + '_ghost'] = (rel_mse(outs[4], r4, ghost_mask)
+                                    if ghost_mask is not None else float('nan'))
+        fmt = lambda v: '-' if v != v else '%.5f' % v
+        print('| %s | %.3g | %.3g | %.2f | %s | %.3g | %.3g | %s | %.5f | %.5f | %s | %s |' % (
+            seq, row['single'], row['k'], row['k'] / row['single'],
+            '%.2f' % (row['perfect'] / row['single']) if 'perfect' in row else '0',
+            row['single_error'][0], row['k_error'][0],
+            ', '.join('%.2f' % (k / s) for k, s in zip(row['k_error'], row['single_error'])),
             row['single_rel'], row['k_rel'],
-            '%.5f' % row['single_ghost'] if row['single_ghost'] == row['single_ghost'] else '-',
-            '%.5f' % row['k_ghost'] if row['k_ghost'] == row['k_ghost'] else '-'))
+            fmt(row['single_ghost']), fmt(row['k_ghost'])))
     print('outputs in', out)
 
 

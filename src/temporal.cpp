@@ -218,32 +218,64 @@ match_neighbours(const FramePlanes& t, const std::vector<FramePlanes>& ns,
     return out;
 }
 
-/// Does the neighbour show frame t's light around pixel (x, y)? A paired
-/// test on the luminance differences of the matched pixels in the box of
-/// radius r: their mean within `sigmas` standard errors of 0 (at least 4
-/// pairs). A moving shadow, a light switched on or a reflection that moves
-/// differently from its surface changes the mean; noise only its spread.
-bool
-same_light(const std::vector<Match>& m, const ROI& w, int x, int y, int r,
-           float sigmas)
+/// For each pixel of roi: does the neighbour show frame t's light around
+/// it? A paired test on the luminance differences of the matched pixels in
+/// the box of radius r (clipped to the window w): their mean within
+/// `sigmas` standard errors of 0, with at least 4 pairs. A moving shadow, a
+/// light switched on or a reflection that moves differently from its
+/// surface changes the mean; noise only its spread. Each scale r, 2r, 4r ...
+/// must agree. The sums run in one order per pixel (the box's columns, then
+/// their sums from left to right), so that a pixel's answer does not depend
+/// on roi or the thread count.
+std::vector<uint8_t>
+light_agrees(const std::vector<Match>& m, const ROI& w, const ROI& roi,
+             const TemporalOptions& opt, int nthreads)
 {
-    double n = 0.0, sum = 0.0, sum2 = 0.0;
-    for (int v = std::max(y - r, w.ybegin); v <= std::min(y + r, w.yend - 1); ++v)
-        for (int u = std::max(x - r, w.xbegin); u <= std::min(x + r, w.xend - 1);
-             ++u) {
-            const Match& p = m[size_t(v - w.ybegin) * size_t(w.width())
-                               + size_t(u - w.xbegin)];
-            if (p.j == kNoMatch || !std::isfinite(p.dz))
-                continue;
-            n += 1.0;
-            sum += p.dz;
-            sum2 += double(p.dz) * p.dz;
-        }
-    if (n < 4.0)
-        return false;
-    const double mean = sum / n;
-    const double var  = std::max(sum2 - n * mean * mean, 0.0) / (n - 1.0);
-    return std::fabs(mean) <= double(sigmas) * std::sqrt(var / n);
+    std::vector<uint8_t> agrees(roi.npixels(), 1);
+    const double sigmas = opt.rejection_sigmas;
+    for (int scale = 0; scale < opt.test_scales; ++scale) {
+        const int r = opt.test_radius << scale;
+        detail::for_rows(roi, nthreads, [&](int y) {
+            // Per column of the window: the pairs, the sum and the sum of
+            // squares over the box's rows.
+            const int width = w.width();
+            std::vector<double> cn(size_t(width), 0.0), cs(size_t(width), 0.0),
+                cs2(size_t(width), 0.0);
+            for (int v = std::max(y - r, w.ybegin);
+                 v <= std::min(y + r, w.yend - 1); ++v) {
+                const Match* row = &m[size_t(v - w.ybegin) * size_t(width)];
+                for (int u = 0; u < width; ++u) {
+                    const Match& p = row[u];
+                    if (p.j == kNoMatch || !std::isfinite(p.dz))
+                        continue;
+                    cn[size_t(u)] += 1.0;
+                    cs[size_t(u)] += p.dz;
+                    cs2[size_t(u)] += double(p.dz) * p.dz;
+                }
+            }
+            uint8_t* out = &agrees[size_t(y - roi.ybegin) * size_t(roi.width())];
+            for (int x = roi.xbegin; x < roi.xend; ++x) {
+                if (!out[x - roi.xbegin])
+                    continue;
+                double n = 0.0, sum = 0.0, sum2 = 0.0;
+                for (int u = std::max(x - r, w.xbegin);
+                     u <= std::min(x + r, w.xend - 1); ++u) {
+                    n += cn[size_t(u - w.xbegin)];
+                    sum += cs[size_t(u - w.xbegin)];
+                    sum2 += cs2[size_t(u - w.xbegin)];
+                }
+                bool same = n >= 4.0;
+                if (same) {
+                    const double mean = sum / n;
+                    const double var  = std::max(sum2 - n * mean * mean, 0.0)
+                                       / (n - 1.0);
+                    same = std::fabs(mean) <= sigmas * std::sqrt(var / n);
+                }
+                out[x - roi.xbegin] = same;
+            }
+        });
+    }
+    return agrees;
 }
 
 
@@ -317,8 +349,14 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
             return false;
         }
     }
-    // Frame t and the flows over roi and the test's box around it.
-    const int r = std::max(opt.test_radius, 0);
+    // Frame t and the flows over roi and the test's largest box around it.
+    if (opt.test_radius < 1 || opt.test_scales < 1 || opt.test_scales > 8) {
+        dst.radiance.errorfmt("{}: the light test needs test_radius >= 1 and "
+                              "1 to 8 test_scales",
+                              kOp);
+        return false;
+    }
+    const int r = opt.test_reach();
     ROI region  = roi_intersection(
         ROI(roi.xbegin - r, roi.xend + r, roi.ybegin - r, roi.yend + r), full);
     region.chbegin = 0;
@@ -376,6 +414,9 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
             if (matches[size_t(via)][i].j == kNoMatch)
                 matches[k][i].j = kNoMatch;
     }
+    std::vector<std::vector<uint8_t>> agrees;
+    for (const std::vector<Match>& m : matches)
+        agrees.push_back(light_agrees(m, t.window, roi, opt, nthreads));
     const bool with_variance = !t.variance.empty();
     const bool with_halves   = !t.half_a.empty();
     for (const FramePlanes& n : ns)
@@ -444,8 +485,8 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
                 const FramePlanes& n = ns[k];
                 const Match& m       = matches[k][i];
                 if (m.j == kNoMatch
-                    || !same_light(matches[k], t.window, x, y, r,
-                                   opt.rejection_sigmas))
+                    || !agrees[k][size_t(y - roi.ybegin) * size_t(roi.width())
+                                  + size_t(x - roi.xbegin)])
                     continue;
                 const size_t j = m.j;
                 bool used = false;

@@ -332,3 +332,76 @@ TEST(Temporal, AChainedNeighbourCountsOnlyWhereItsViaDoes)
     neighbours[1].via = 1;  // itself
     EXPECT_FALSE(zdenoise::temporal_combine(c, as_frame(t), neighbours));
 }
+
+
+// A soft shadow that lies on the neighbours but not on frame t (it moved
+// away): the light there is 10 % lower, less than the noise of a 5x5 box
+// can show. The test's larger boxes see it, so frame t keeps its own light
+// there; with the 5x5 box alone the shadow is averaged in.
+TEST(Temporal, ABroadDimmerLightInTheNeighboursIsNotAveragedIn)
+{
+    const int W = 96, H = 96, K = 2, t = K;
+    const float albedo = 0.5f, light = 1.0f, shadow = 0.9f;
+    auto in_shadow = [](int x, int y) { return x >= 24 && x < 72 && y >= 24 && y < 72; };
+    struct Frame {
+        ImageBuf noisy, albedo, normal, depth, id;
+    };
+    std::vector<Frame> frames(2 * K + 1);
+    for (int f = 0; f <= 2 * K; ++f) {
+        std::mt19937 rng(uint32_t(91 + f));
+        std::normal_distribution<float> noise(0.0f, 0.3f);
+        std::vector<float> noisy, alb, normal, depth, id;
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                const float l = f != t && in_shadow(x, y) ? shadow : light;
+                for (int c = 0; c < 3; ++c) {
+                    noisy.push_back(albedo * l * (1.0f + noise(rng)));
+                    alb.push_back(albedo);
+                }
+                normal.insert(normal.end(), { 0.0f, 0.0f, 1.0f });
+                depth.push_back(10.0f);
+                id.push_back(1.0f);
+            }
+        Frame& fr = frames[size_t(f)];
+        fr.noisy  = synth::make_image(W, H, 3, noisy);
+        fr.albedo = synth::make_image(W, H, 3, alb);
+        fr.normal = synth::make_image(W, H, 3, normal);
+        fr.depth  = synth::make_image(W, H, 1, depth);
+        fr.id     = synth::make_image(W, H, 1, id);
+    }
+    auto as_frame = [](const Frame& fr) {
+        zdenoise::TemporalFrame tf;
+        tf.radiance         = &fr.noisy;
+        tf.albedo           = &fr.albedo;
+        tf.guides.normal    = &fr.normal;
+        tf.guides.depth     = &fr.depth;
+        tf.guides.object_id = &fr.id;
+        return tf;
+    };
+    std::vector<zdenoise::TemporalFrame> neighbours;
+    for (int f = 0; f <= 2 * K; ++f)
+        if (f != t)
+            neighbours.push_back(as_frame(frames[size_t(f)]));
+    // The mean light over the shadow's inside (its edges are found by the
+    // small box anyway), relative to frame t's true light.
+    auto inside_light = [&](const zdenoise::TemporalOptions& options) {
+        zdenoise::TemporalCombined c;
+        EXPECT_TRUE(zdenoise::temporal_combine(c, as_frame(frames[size_t(t)]), neighbours,
+                                               options))
+            << c.radiance.geterror();
+        double sum = 0.0;
+        int n      = 0;
+        for (int y = 32; y < 64; ++y)
+            for (int x = 32; x < 64; ++x, ++n)
+                sum += synth::luminance(c.radiance, x, y);
+        return sum / n / double(albedo * light);
+    };
+    zdenoise::TemporalOptions small_box_only;
+    small_box_only.test_scales = 1;
+    const double with_scales = inside_light({}), small_box = inside_light(small_box_only);
+    std::printf("  light inside the shadow, relative to frame t's: %.3f with every "
+                "scale, %.3f with the 5x5 box only\n",
+                with_scales, small_box);
+    EXPECT_LT(small_box, 0.95) << "the 5x5 box alone lets the shadow in (else this proves nothing)";
+    EXPECT_NEAR(with_scales, 1.0, 0.02);
+}

@@ -24,12 +24,23 @@ struct TemporalOptions {
     /// Normals (Guides::normal) must have at least this cosine.
     float normal_cut = 0.9f;
     /// A neighbour's pixel counts only where the light agrees around it:
-    /// over the box of this radius, the mean difference of the matched
-    /// pixels' light luminance lies within `rejection_sigmas` standard
-    /// errors of 0 (a paired test; docs/TEMPORAL.md). It rejects what the
-    /// guides cannot see: moving shadows and highlights, changing lights.
+    /// over a box around it, the mean difference of the matched pixels'
+    /// light luminance lies within `rejection_sigmas` standard errors of 0
+    /// (a paired test; docs/TEMPORAL.md). It rejects what the guides cannot
+    /// see: moving shadows and highlights, changing lights. The test runs
+    /// on `test_scales` boxes, of radius test_radius, twice that, and so
+    /// on, and every one must agree: the small box sees a change confined
+    /// to a few pixels, the large ones have the pairs to see a small,
+    /// broad change (a soft shadow that moves) that the noise of 25 pairs
+    /// hides.
     int test_radius        = 2;
+    int test_scales        = 3;
     float rejection_sigmas = 3.0f;
+    /// The largest box's radius: how far around a pixel the test reads.
+    int test_reach() const
+    {
+        return test_scales > 0 ? test_radius << (test_scales - 1) : 0;
+    }
     /// As FilterOptions::albedo_eps: light = radiance / (albedo + eps)
     /// where the albedo is demodulated (docs/FILTER.md section 1).
     float albedo_eps = 1e-3f;
@@ -75,7 +86,7 @@ struct TemporalCombined {
 /// pixel noise stays independent) lies in its data window and shows the
 /// same surface (both surface or both not; depth within depth_tolerance;
 /// normals' cosine >= normal_cut; the same object id, or the same primary
-/// Cryptomatte id) and the same light (the paired test of test_radius),
+/// Cryptomatte id) and the same light (the paired test at every scale),
 /// the light z = L / (A + eps) of each demodulated channel is averaged,
 /// as is the albedo A, and the light is remodulated by that albedo. Channels
 /// that are not demodulated in both frames keep frame t's radiance.

@@ -152,7 +152,7 @@ temporal_options(const Job& j)
 int
 temporal_reach(const Job& j)
 {
-    return j.temporal > 0 ? temporal_options(j).test_radius : 0;
+    return j.temporal > 0 ? temporal_options(j).test_reach() : 0;
 }
 
 
@@ -394,7 +394,7 @@ combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
     const TemporalOptions options = temporal_options(j);
     const int halo     = filter_halo(j.filter);
     const ROI region   = strip.widened(halo);
-    const ROI around   = strip.widened(halo + options.test_radius);
+    const ROI around   = strip.widened(halo + options.test_reach());
     auto crop = [&](ImageBuf& b, const ROI& to) {
         if (!b.initialized() || b.roi() == to)
             return;
