@@ -513,15 +513,19 @@ denoise_file(py::object input, py::object output, bool force,
         return o.key && std::string(o.key) == "in";
     }, command);
     const std::string out = path_text(output, "output");
-    if (job::job_has_frame_pattern(command.job) || job::has_frame_pattern(out))
+    if (job::has_frame_pattern(out))
         throw py::value_error(
-            "denoise_file() denoises one image, and a file name here names a "
-            "frame pattern (#, @ or %0Nd): denoise each frame's files, or use "
-            "the zdenoise command's --frames");
-    const std::string invalid = job::validate(command.job,
-                                              job::Spelling::Keyword);
+            "denoise_file() writes one image, and the output names a frame "
+            "pattern (#, @ or %0Nd): name the frame's file, or use the "
+            "zdenoise command's --frames");
+    std::string invalid = job::validate(command.job, job::Spelling::Keyword);
+    if (invalid.empty())
+        invalid = job::frame_problem(command.job);
     if (!invalid.empty())
         throw py::value_error(message(invalid));
+    // A frame of patterned inputs (frame="1042"), with temporal its
+    // neighbours within shot_range, as a recipe's.
+    command.job = job::resolve_frame(command.job);
     // As the command: never replace an input unless asked.
     const std::string refused = job::output_is_input(
         command.job, out, force, job::Spelling::Keyword);

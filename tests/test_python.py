@@ -363,6 +363,35 @@ class Files(unittest.TestCase):
         self.assertEqual(self.files(), ["cmd0.exr", "cmd1.exr", "cmd2.exr", "p.exr",
                                         "py0.exr", "py1.exr", "py2.exr"])
 
+    def test_a_frame_of_a_sequence_with_its_neighbours(self):
+        # frame="2" of patterned inputs, with temporal=1: the file the
+        # command writes for frame 2 of the sequence (docs/TEMPORAL.md).
+        import OpenImageIO as oiio
+        for f in (1, 2, 3):
+            noisy, albedo, _ = textured_scene(seed=40 + f)
+            for name, pixels in (("noisy", noisy), ("albedo", albedo)):
+                image = oiio.ImageBuf(oiio.ImageSpec(pixels.shape[1], pixels.shape[0], 3,
+                                                     oiio.FLOAT))
+                image.set_pixels(oiio.ROI(), pixels)
+                self.assertTrue(image.write(self.path("%s.%04d.exr" % (name, f))),
+                                image.geterror())
+        noisy, albedo = self.path("noisy.#.exr"), self.path("albedo.#.exr")
+        r = self.command("--in", noisy, "--albedo", albedo, "--frames", "1-3",
+                         "--temporal", "1", "--static-camera", "-o", self.path("cmd.#.exr"))
+        self.assertEqual(r.returncode, 0, r.stderr)
+        zdenoise.denoise_file(noisy, self.path("py.exr"), albedo=albedo, frame="2",
+                              temporal=1, static_camera=True, shot_range="1-3")
+        with open(self.path("cmd.0002.exr"), "rb") as a, open(self.path("py.exr"), "rb") as b:
+            self.assertTrue(a.read() == b.read(), "frame 2 is not the command's")
+        for options, message in [
+            (dict(temporal=1, static_camera=True), '"temporal" needs "frame"'),
+            (dict(frame="2", temporal=1, static_camera=True), '"temporal" needs "shot-range"'),
+            (dict(frame="2-3"), '"frame" must be one frame'),
+        ]:
+            with self.assertRaises(ValueError) as caught:
+                zdenoise.denoise_file(noisy, self.path("out.exr"), albedo=albedo, **options)
+            self.assertTrue(str(caught.exception).startswith(message), str(caught.exception))
+
     def test_statistics(self):
         stats = zdenoise.denoise_file(SAMPLE, self.path("out.exr"), tile=32)
         keys = {"pixels", "windows", "stop_quality", "stop_size", "stop_edge",

@@ -240,6 +240,58 @@ frame_bounds(const std::string& list, int& first, int& last)
 }
 
 
+std::string
+frame_problem(const Job& job)
+{
+    const bool patterned = job_has_frame_pattern(job);
+    if (job.frame.empty()) {
+        if (job.temporal > 0)
+            return "\"temporal\" needs \"frame\" (this frame) and inputs with a "
+                   "frame pattern (shot.#.exr)";
+        if (patterned)
+            return "the inputs name a frame pattern: \"frame\" says which frame "
+                   "(e.g. \"1042\")";
+        if (!job.shot_range.empty())
+            return "\"shot-range\" needs \"frame\" and inputs with a frame "
+                   "pattern (shot.#.exr)";
+        return "";
+    }
+    std::vector<int> frames;
+    if (!parse_frame_list(job.frame, frames) || frames.size() != 1)
+        return Strutil::fmt::format("\"frame\" must be one frame (\"1042\"), not '{}'",
+                      job.frame.substr(0, 40));
+    if (!patterned)
+        return "\"frame\" needs inputs with a frame pattern (shot.#.exr)";
+    if (job.temporal > 0 && job.shot_range.empty())
+        return "\"temporal\" needs \"shot-range\": the shot's frames "
+               "(\"1001-1100\"), which the neighbours lie within";
+    int first = 0, last = 0;
+    if (!job.shot_range.empty()) {
+        if (!frame_bounds(job.shot_range, first, last))
+            return Strutil::fmt::format("\"shot-range\" must be a frame list "
+                          "(\"1001-1100\"), not '{}'",
+                          job.shot_range.substr(0, 40));
+        if (frames[0] < first || frames[0] > last)
+            return Strutil::fmt::format("\"shot-range\" '{}' does not hold \"frame\" {}",
+                          job.shot_range.substr(0, 40), frames[0]);
+    }
+    return "";
+}
+
+
+Job
+resolve_frame(const Job& job)
+{
+    std::vector<int> frame;
+    if (job.frame.empty() || !parse_frame_list(job.frame, frame))
+        return job;
+    int first = frame[0], last = frame[0];
+    if (!job.shot_range.empty())
+        frame_bounds(job.shot_range, first, last);
+    return job_with_neighbours(job, frame[0], first, last);
+}
+
+
 Job
 job_for_frame(const Job& job, int frame)
 {

@@ -71,6 +71,19 @@ job_for_frame(const Job& job, int frame);
 Job
 job_with_neighbours(const Job& job, int frame, int first, int last);
 
+/// Why `job` (a recipe's or a keyword call's) is not one frame, in the
+/// recipe's spelling, or "": Job::frame is one frame, given exactly when
+/// the inputs name a frame pattern; temporal needs it and shot_range, which
+/// must hold it.
+std::string
+frame_problem(const Job& job);
+
+/// The job of Job::frame (its inputs' files, with temporal its neighbours
+/// within shot_range); `job` itself when it has no frame. After
+/// frame_problem() found none.
+Job
+resolve_frame(const Job& job);
+
 /// The first and last frame of frame list `list` (--shot-range), or false.
 bool
 frame_bounds(const std::string& list, int& first, int& last);

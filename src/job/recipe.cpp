@@ -340,47 +340,6 @@ parse_option(const Option& option, const json& value, const Source& source,
 }
 
 
-/// A recipe's frame: "frame" is one frame, given exactly when the inputs
-/// name a frame pattern; "temporal" needs "shot-range", the shot that holds
-/// it (read_recipe() takes the neighbours from there).
-void
-check_frame(const Job& job)
-{
-    const bool patterned = job_has_frame_pattern(job);
-    if (job.frame.empty()) {
-        if (job.temporal > 0)
-            fail("\"temporal\" needs \"frame\" (this frame) and inputs with "
-                 "a frame pattern (shot.#.exr)");
-        if (patterned)
-            fail("the inputs name a frame pattern: \"frame\" says which "
-                 "frame (e.g. \"1042\")");
-        if (!job.shot_range.empty())
-            fail("\"shot-range\" needs \"frame\" and inputs with a frame "
-                 "pattern (shot.#.exr)");
-        return;
-    }
-    std::vector<int> frames;
-    if (!parse_frame_list(job.frame, frames) || frames.size() != 1)
-        fail(format("\"frame\" must be one frame (\"1042\"), not {}",
-                    shown(json(job.frame))));
-    if (!patterned)
-        fail("\"frame\" needs inputs with a frame pattern (shot.#.exr)");
-    if (job.temporal > 0 && job.shot_range.empty())
-        fail("\"temporal\" needs \"shot-range\": the shot's frames "
-             "(\"1001-1100\"), which the neighbours lie within");
-    int first = 0, last = 0;
-    if (!job.shot_range.empty()) {
-        if (!frame_bounds(job.shot_range, first, last))
-            fail(format("\"shot-range\" must be a frame list (\"1001-1100\"), "
-                        "not {}",
-                        shown(json(job.shot_range))));
-        if (frames[0] < first || frames[0] > last)
-            fail(format("\"shot-range\" {} does not hold \"frame\" {}",
-                        shown(json(job.shot_range)), frames[0]));
-    }
-}
-
-
 /// The "preset" key's `value`, applied to `command` (before the other
 /// filter options, which modify it). `key`: the key as the messages name it.
 void
@@ -444,7 +403,9 @@ parse(const std::string& text, const std::string& folder,
     const std::string invalid = validate(command.job, Spelling::Recipe);
     if (!invalid.empty())
         fail(invalid);
-    check_frame(command.job);
+    const std::string frame = frame_problem(command.job);
+    if (!frame.empty())
+        fail(frame);
     if (rules.max_rmax && command.job.filter.r_max > rules.max_rmax)
         fail(format("\"rmax\" is {}: more than the {} a recipe may ask for "
                     "({}=rmax=N allows more)",
@@ -571,18 +532,7 @@ read_recipe(const std::string& filename, Job& job, std::string& error)
     if (!parse_recipe(text, path, Filesystem::parent_path(path), overrides,
                       rules, job, error))
         return false;
-    // A frame of patterned inputs: its files, and with "temporal" its
-    // neighbours within the shot (checked by check_frame()).
-    if (!job.frame.empty()) {
-        std::vector<int> frame;
-        int first = 0, last = 0;
-        parse_frame_list(job.frame, frame);
-        if (job.shot_range.empty())
-            first = last = frame[0];
-        else
-            frame_bounds(job.shot_range, first, last);
-        job = job_with_neighbours(job, frame[0], first, last);
-    }
+    job = resolve_frame(job);
     return true;
 }
 
