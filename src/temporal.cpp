@@ -419,6 +419,17 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
         agrees.push_back(light_agrees(m, t.window, roi, opt, nthreads));
     const bool with_variance = !t.variance.empty();
     const bool with_halves   = !t.half_a.empty();
+    const size_t npixels     = roi.npixels();
+    dst.same_surface.assign(neighbours.size(), 0.0);
+    for (size_t k = 0; k < neighbours.size(); ++k) {
+        size_t same = 0;
+        for (int y = roi.ybegin; y < roi.yend; ++y)
+            for (int x = roi.xbegin; x < roi.xend; ++x)
+                same += matches[k][t.index(x, y)].j != kNoMatch;
+        dst.same_surface[k] = npixels ? double(same) / double(npixels) : 0.0;
+    }
+    // Counted per row and neighbour (summed after, in order).
+    std::vector<uint32_t> counted(size_t(roi.height()) * neighbours.size(), 0);
     for (const FramePlanes& n : ns)
         if ((with_variance && n.variance.empty())
             || (with_halves && n.half_a.empty())) {
@@ -498,6 +509,7 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
                         used = true;
                     }
                 frames += used;
+                counted[size_t(y - roi.ybegin) * ns.size() + k] += used;
             }
             float* out_rgb = static_cast<float*>(
                 dst.radiance.pixeladdr(x, y));
@@ -541,6 +553,13 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
             }
         }
     });
+    dst.counted.assign(neighbours.size(), 0.0);
+    for (size_t k = 0; k < neighbours.size(); ++k) {
+        double sum = 0.0;
+        for (int y = 0; y < roi.height(); ++y)
+            sum += counted[size_t(y) * ns.size() + k];
+        dst.counted[k] = npixels ? sum / double(npixels) : 0.0;
+    }
     return true;
 }
 

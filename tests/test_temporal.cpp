@@ -404,4 +404,14 @@ TEST(Temporal, ABroadDimmerLightInTheNeighboursIsNotAveragedIn)
                 with_scales, small_box);
     EXPECT_LT(small_box, 0.95) << "the 5x5 box alone lets the shadow in (else this proves nothing)";
     EXPECT_NEAR(with_scales, 1.0, 0.02);
+    // What -v reports per neighbour: the guides match everywhere; the light
+    // test takes out the square (a quarter of the frame).
+    zdenoise::TemporalCombined c;
+    ASSERT_TRUE(zdenoise::temporal_combine(c, as_frame(frames[size_t(t)]), neighbours));
+    ASSERT_EQ(c.same_surface.size(), neighbours.size());
+    for (size_t k = 0; k < neighbours.size(); ++k) {
+        EXPECT_EQ(c.same_surface[k], 1.0);
+        EXPECT_GT(c.counted[k], 0.6);
+        EXPECT_LT(c.counted[k], 0.8);
+    }
 }

@@ -79,6 +79,11 @@ struct TemporalCombined {
     ImageBuf variance;  ///< combined, when frame t has a variance guide
     ImageBuf half_a, half_b;  ///< combined, when frame t has halves
     ImageBuf frames;    ///< 1 channel: the frames averaged at each pixel
+    /// Per neighbour, the share of roi's pixels where it shows the same
+    /// surface (the guides), and where it also shows the same light and
+    /// counted. Near 0 on a moving shot: the flow is not where the pixels
+    /// go (motion vectors of another convention).
+    std::vector<double> same_surface, counted;
 };
 
 /// Average frame t's light with its neighbours': at each pixel p of roi,

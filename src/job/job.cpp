@@ -520,11 +520,19 @@ combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
                          &img.motion })
         crop(*b, region);
     const auto stats = ImageBufAlgo::computePixelStats(c.frames);
-    if (strip.core.ybegin == p.noisy.ybegin)
+    if (strip.core.ybegin == p.noisy.ybegin) {
         result.log.push_back(format("temporal  {:.2f} frames a pixel on "
                                     "average (of {}) in the first strip",
                                     stats.avg.empty() ? 1.0 : stats.avg[0],
                                     n + 1));
+        // Near 0 where things move: vectors of another convention.
+        for (size_t k = 0; k < n; ++k)
+            result.log.push_back(format(
+                "temporal  frame {:+d}: the same surface at {:.0f} %, counted "
+                "at {:.0f} % of the pixels",
+                j.neighbour_offsets[k], 100.0 * c.same_surface[k],
+                100.0 * c.counted[k]));
+    }
 }
 
 
