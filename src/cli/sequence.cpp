@@ -257,9 +257,9 @@ run_batch(const job::Job& job, const std::string& output,
         error = format("{} needs a frame pattern (#, @ or %0Nd) in the "
                        "input and output names, e.g. --in shot.#.exr -o "
                        "clean.#.exr",
-                       !o.frames.empty()       ? "--frames"
-                       : o.print_chunks > 0    ? "--print-chunks"
-                                               : "--shot-range");
+                       !o.frames.empty()    ? "--frames"
+                       : o.print_chunks > 0 ? "--print-chunks"
+                                            : "--shot-range");
         return kExitUsage;
     }
     // The shot the neighbours of --temporal lie in: a farm chunk's
@@ -341,7 +341,9 @@ run_batch(const job::Job& job, const std::string& output,
                           finished ? work_seconds / double(finished)
                                          * double(left)
                                    : 0.0);
-        run_frame(sequence ? job::job_with_neighbours(job, r.frame, first, last) : job, r, o);
+        run_frame(sequence ? job::job_with_neighbours(job, r.frame, first, last)
+                           : job,
+                  r, o);
         work_seconds += r.seconds;
         if (r.status == FrameRecord::Status::Failed) {
             ++failed;

@@ -219,7 +219,8 @@ job_with_neighbours(const Job& job, int frame, int first, int last)
 {
     Job j = job_for_frame(job, frame);
     for (int k = -job.temporal; k <= job.temporal; ++k)
-        if (k != 0 && int64_t(frame) + k >= first && int64_t(frame) + k <= last) {
+        if (k != 0 && int64_t(frame) + k >= first
+            && int64_t(frame) + k <= last) {
             j.neighbours.push_back(job_for_frame(job, frame + k));
             j.neighbour_offsets.push_back(k);
         }
@@ -258,8 +259,9 @@ frame_problem(const Job& job)
     }
     std::vector<int> frames;
     if (!parse_frame_list(job.frame, frames) || frames.size() != 1)
-        return Strutil::fmt::format("\"frame\" must be one frame (\"1042\"), not '{}'",
-                      job.frame.substr(0, 40));
+        return Strutil::fmt::format(
+            "\"frame\" must be one frame (\"1042\"), not '{}'",
+            job.frame.substr(0, 40));
     if (!patterned)
         return "\"frame\" needs inputs with a frame pattern (shot.#.exr)";
     if (job.temporal > 0 && job.shot_range.empty())
@@ -268,12 +270,14 @@ frame_problem(const Job& job)
     int first = 0, last = 0;
     if (!job.shot_range.empty()) {
         if (!frame_bounds(job.shot_range, first, last))
-            return Strutil::fmt::format("\"shot-range\" must be a frame list "
-                          "(\"1001-1100\"), not '{}'",
-                          job.shot_range.substr(0, 40));
+            return Strutil::fmt::format(
+                "\"shot-range\" must be a frame list (\"1001-1100\"), not "
+                "'{}'",
+                job.shot_range.substr(0, 40));
         if (frames[0] < first || frames[0] > last)
-            return Strutil::fmt::format("\"shot-range\" '{}' does not hold \"frame\" {}",
-                          job.shot_range.substr(0, 40), frames[0]);
+            return Strutil::fmt::format(
+                "\"shot-range\" '{}' does not hold \"frame\" {}",
+                job.shot_range.substr(0, 40), frames[0]);
     }
     return "";
 }
