@@ -343,10 +343,8 @@ TEST(Temporal, ABroadDimmerLightInTheNeighboursIsNotAveragedIn)
     const int W = 96, H = 96, K = 2, t = K;
     const float albedo = 0.5f, light = 1.0f, shadow = 0.9f;
     auto in_shadow = [](int x, int y) { return x >= 24 && x < 72 && y >= 24 && y < 72; };
-    struct Frame {
-        ImageBuf noisy, albedo, normal, depth, id;
-    };
-    std::vector<Frame> frames(2 * K + 1);
+    // Flat frames, one object facing the camera: only the light differs.
+    std::vector<synth::Scene> frames(2 * K + 1);
     for (int f = 0; f <= 2 * K; ++f) {
         std::mt19937 rng(uint32_t(91 + f));
         std::normal_distribution<float> noise(0.0f, 0.3f);
@@ -362,31 +360,22 @@ TEST(Temporal, ABroadDimmerLightInTheNeighboursIsNotAveragedIn)
                 depth.push_back(10.0f);
                 id.push_back(1.0f);
             }
-        Frame& fr = frames[size_t(f)];
-        fr.noisy  = synth::make_image(W, H, 3, noisy);
-        fr.albedo = synth::make_image(W, H, 3, alb);
-        fr.normal = synth::make_image(W, H, 3, normal);
-        fr.depth  = synth::make_image(W, H, 1, depth);
-        fr.id     = synth::make_image(W, H, 1, id);
+        synth::Scene& fr = frames[size_t(f)];
+        fr.noisy     = synth::make_image(W, H, 3, noisy);
+        fr.albedo    = synth::make_image(W, H, 3, alb);
+        fr.normal    = synth::make_image(W, H, 3, normal);
+        fr.depth     = synth::make_image(W, H, 1, depth);
+        fr.object_id = synth::make_image(W, H, 1, id);
     }
-    auto as_frame = [](const Frame& fr) {
-        zdenoise::TemporalFrame tf;
-        tf.radiance         = &fr.noisy;
-        tf.albedo           = &fr.albedo;
-        tf.guides.normal    = &fr.normal;
-        tf.guides.depth     = &fr.depth;
-        tf.guides.object_id = &fr.id;
-        return tf;
-    };
     std::vector<zdenoise::TemporalFrame> neighbours;
     for (int f = 0; f <= 2 * K; ++f)
         if (f != t)
-            neighbours.push_back(as_frame(frames[size_t(f)]));
+            neighbours.push_back(scene_frame(frames[size_t(f)]));
     // The mean light over the shadow's inside (its edges are found by the
     // small box anyway), relative to frame t's true light.
     auto inside_light = [&](const zdenoise::TemporalOptions& options) {
         zdenoise::TemporalCombined c;
-        EXPECT_TRUE(zdenoise::temporal_combine(c, as_frame(frames[size_t(t)]), neighbours,
+        EXPECT_TRUE(zdenoise::temporal_combine(c, scene_frame(frames[size_t(t)]), neighbours,
                                                options))
             << c.radiance.geterror();
         double sum = 0.0;
@@ -407,7 +396,7 @@ TEST(Temporal, ABroadDimmerLightInTheNeighboursIsNotAveragedIn)
     // What -v reports per neighbour: the guides match everywhere; the light
     // test takes out the square (a quarter of the frame).
     zdenoise::TemporalCombined c;
-    ASSERT_TRUE(zdenoise::temporal_combine(c, as_frame(frames[size_t(t)]), neighbours));
+    ASSERT_TRUE(zdenoise::temporal_combine(c, scene_frame(frames[size_t(t)]), neighbours));
     ASSERT_EQ(c.same_surface.size(), neighbours.size());
     for (size_t k = 0; k < neighbours.size(); ++k) {
         EXPECT_EQ(c.same_surface[k], 1.0);

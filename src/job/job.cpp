@@ -419,12 +419,15 @@ combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
     std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
         return std::abs(j.neighbour_offsets[a]) < std::abs(j.neighbour_offsets[b]);
     });
-    auto index_of = [&](int o) {
-        for (size_t k = 0; k < n; ++k)
-            if (j.neighbour_offsets[k] == o)
-                return k;
-        return n;  // o == 0: frame t
-    };
+    // before[k]: the neighbour one frame nearer to frame t than k (n:
+    // frame t itself), the frame its flow's last step leaves from.
+    std::vector<size_t> before(n, n);
+    for (size_t k = 0; k < n; ++k) {
+        const int o = j.neighbour_offsets[k], nearer = o - (o > 0 ? 1 : -1);
+        for (size_t m = 0; m < n; ++m)
+            if (j.neighbour_offsets[m] == nearer)
+                before[k] = m;
+    }
     std::vector<FrameRoles> frames(n);
     std::vector<ImageBuf> flows(n);
     const int reach = p.albedo_samples ? albedo_prefilter_halo() : 0;
@@ -434,13 +437,13 @@ combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
         if (!j.static_camera) {
             // One step from the frame before it (frame t, or the neighbour
             // nearer to it), by that frame's motion vectors.
-            const size_t before = index_of(o - dir);
-            const ImageBuf& vectors = before == n ? img.motion
-                                                  : frames[before].motion;
+            const ImageBuf& vectors = before[k] == n ? img.motion
+                                                     : frames[before[k]].motion;
             ImageBuf step = vector_flow(vectors, dir, j.threads);
-            if (before == n) {
+            if (before[k] == n) {
                 flows[k] = std::move(step);
-            } else if (!chain_flow(flows[k], flows[before], step, {}, j.threads)) {
+            } else if (!chain_flow(flows[k], flows[before[k]], step, {},
+                                   j.threads)) {
                 fail(format("--temporal: {}", one_line(flows[k].geterror())));
             }
         }
@@ -499,10 +502,8 @@ combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
         neighbours.push_back(as_frame(f.radiance, f.albedo, f.normal, f.depth,
                                       f.id, f.variance, f.half_a, f.half_b));
         neighbours.back().flow = j.static_camera ? nullptr : &flows[k];
-        const int o = j.neighbour_offsets[k];
-        const size_t before = index_of(o - (o > 0 ? 1 : -1));
-        if (!j.static_camera && before != n)
-            neighbours.back().via = int(before);
+        if (!j.static_camera && before[k] != n)
+            neighbours.back().via = int(before[k]);
     }
     TemporalCombined c;
     if (!temporal_combine(c, t, neighbours, options, region, j.threads))
