@@ -10,11 +10,17 @@ and prints per sample count:
   albedo       relMSE of its Denoising Albedo against <scene>_albedo.exr (the reference's)
   spp S        relMSE against <scene>_ref.exr of `zdenoise --in <scene>_sppS_s1.exr` with
                no flags / with --aux <scene>_albedo.exr / with --aux the render (seed 1; and
-               seed 2 with --seeds 1,2, averaged)
+               seed 2 with --seeds 1,2, averaged) / and with --oidn DIR (shared/peers'
+               oidn-install, a yardstick run beside it) Intel OIDN given the same aux
+               render's albedo and normal with its clean-aux model
+  rejected     with --aux the render at the last spp, the pixels whose aux albedo zdenoise
+               replaced by the render's own (its -v line)
 
 Usage: bench/aux_render.py --blends DIR [--samples 4,8,16,32] [--spp 4,16,64] [--seeds 1]
-                           [--scenes ..] [--zdenoise BIN] [--blender BIN] [--lock FILE]
-                           [--json FILE]
+                           [--scenes ..] [--data DIR] [--zdenoise BIN] [--blender BIN]
+                           [--oidn DIR] [--lock FILE] [--json FILE]
+--data DIR holds <scene>/<scene>_spp<S>_s<seed>.exr, <scene>_ref.exr and <scene>_albedo.exr
+(shared/data, or the renders of bench/scenes/render_set.sh).
 Runs with Debian's /usr/bin/python3 (OpenImageIO, numpy). Exit status 0; 2 on a setup error.
 """
 import argparse
@@ -42,6 +48,7 @@ def main():
     p.add_argument("--zdenoise", default=os.path.join(REPO, "build", "bin", "zdenoise"))
     p.add_argument("--blender", default="blender")
     p.add_argument("--data", default=DATA)
+    p.add_argument("--oidn", default="", help="oidn-install directory (a yardstick)")
     p.add_argument("--lock", default="")
     p.add_argument("--json", default="")
     a = p.parse_args()
@@ -58,12 +65,32 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "out.exr")
 
+        last_log = [""]
+
         def denoised(noisy, extra):
-            cmd = lock + [a.zdenoise, "--in", noisy, "-o", out, "--threads", "2"] + extra
+            cmd = lock + [a.zdenoise, "--in", noisy, "-o", out, "--threads", "2", "-v"] + extra
             r = subprocess.run(cmd, capture_output=True, text=True)
             if r.returncode:
                 sys.exit(f"aux_render.py: {' '.join(cmd)}: {r.stderr.strip()}")
+            last_log[0] = r.stdout + r.stderr
             return channels(out, None)
+
+        def oidn(noisy, aux):
+            prefix = os.path.join(tmp, "oidn")
+            conv = os.path.join(REPO, "..", "shared", "peers", "exr2pfm.py")
+            subprocess.run(["/usr/bin/python3", conv, noisy, prefix, "beauty"], check=True)
+            subprocess.run(["/usr/bin/python3", conv, aux, prefix, "alb", "nrm"], check=True)
+            pfm = prefix + "_out.pfm"
+            subprocess.run(lock + [os.path.join(a.oidn, "bin", "oidnDenoise"), "--hdr",
+                                   prefix + "_beauty.pfm", "--alb", prefix + "_alb.pfm", "--nrm",
+                                   prefix + "_nrm.pfm", "--clean_aux", "--threads", "2", "-o",
+                                   pfm], check=True, capture_output=True)
+            subprocess.run(["oiiotool", pfm, "-o", out], check=True)
+            return channels(out, None)
+
+        def rejected():
+            m = re.search(r"the render's own used at (\d+) pixels \(([\d.]+) %\)", last_log[0])
+            return float(m.group(2)) if m else None
 
         for scene in a.scenes:
             blend = os.path.join(a.blends, f"{scene}.blend")
@@ -88,14 +115,17 @@ def main():
                        "aux/beauty": t / beauty,
                        "albedo": relmse(channels(aux, "Denoising Albedo"), ref_albedo)}
                 for spp in a.spp.split(","):
-                    none = refa = mine = 0.0
+                    none = refa = mine = peer = 0.0
                     seeds = a.seeds.split(",")
                     for seed in seeds:
                         noisy = os.path.join(d, f"{scene}_spp{spp}_s{seed}.exr")
                         none += base[(spp, seed)][0] / len(seeds)
                         refa += base[(spp, seed)][1] / len(seeds)
                         mine += relmse(denoised(noisy, ["--aux", aux]), ref) / len(seeds)
-                    row[f"spp{spp}"] = [none, refa, mine]
+                        row["rejected %"] = rejected()
+                        if a.oidn:
+                            peer += relmse(oidn(noisy, aux), ref) / len(seeds)
+                    row[f"spp{spp}"] = [none, refa, mine] + ([peer] if a.oidn else [])
                 rows.append(row)
                 print(json.dumps(row), flush=True)
     if a.json:

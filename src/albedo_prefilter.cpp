@@ -105,9 +105,7 @@ coverage_variance(AlbedoPlanes& p, int samples, int nthreads)
                             hi = std::max(hi, b);
                         }
                     }
-                const float range = hi - lo;
-                const float t     = range > 1e-6f ? (a - lo) / range : 0.0f;
-                p.v[i] = range * range * t * (1.0f - t) / strata;
+                p.v[i] = detail::albedo_mixture_variance(a, lo, hi) / strata;
             }
     }, detail::paropt_any_length(nthreads));
 }

@@ -64,6 +64,19 @@ albedo_demodulated(float albedo, float albedo_eps)
            && albedo * albedo_eps <= 1.0f;
 }
 
+/// The variance of one sample of an albedo that a pixel's footprint mixes
+/// from lo and hi (the least and the most of its 3x3) in the proportion
+/// its mean `a` says: (hi - lo)^2 t (1 - t), t = (a - lo) / (hi - lo)
+/// (docs/FILTER.md section 12). Divided by the samples' count (N, or
+/// N^(3/2) for stratified samples) it is the pixel mean's.
+inline float
+albedo_mixture_variance(float a, float lo, float hi)
+{
+    const float range = hi - lo;
+    const float t     = range > 1e-6f ? (a - lo) / range : 0.0f;
+    return range * range * t * (1.0f - t);
+}
+
 /// Largest quotient magnitude taking part in fits (docs/FILTER.md section
 /// 2): the filter squares values in float, and a larger one (overflowed
 /// shading, not light) would swamp every window around it.

@@ -382,6 +382,61 @@ ZDENOISE_API ImageBuf prefilter_albedo(const ImageBuf& albedo, int samples,
 /// How far a pixel of prefilter_albedo() looks: 5 pixels.
 ZDENOISE_API int albedo_prefilter_halo();
 
+/// What pool_aux_albedo() knows of its two albedos.
+struct AuxAlbedoOptions {
+    /// Samples per pixel of the render's own albedo (>= 1). Unknown: 1,
+    /// the noisiest it can be, so that noise is never taken for a wrong
+    /// auxiliary pixel.
+    int render_samples = 1;
+    /// Samples per pixel of the auxiliary albedo; 0: noise-free (exact).
+    int aux_samples = 0;
+    /// Relative rounding of the stored values (both files): differences
+    /// below it are never disagreements. Default: half float's (2^-11),
+    /// the coarsest a renderer writes an albedo in.
+    float precision = 1.0f / 2048.0f;
+    /// The pixels AuxAlbedoStats counts (default: all of the ROI), so that
+    /// strips computed with a halo count each pixel once.
+    ROI counted = {};
+};
+
+/// What pool_aux_albedo() did over its output pixels.
+struct AuxAlbedoStats {
+    uint64_t pixels   = 0;  ///< pixels of the ROI
+    uint64_t rejected = 0;  ///< of those, where the render's own was used
+};
+
+/// The auxiliary albedo made safe and pooled with the render's own
+/// (docs/AUX.md, "Wrong auxiliary pixels"): where the two disagree in some
+/// channel by more than 4 standard deviations of their difference (each
+/// one's anti-aliasing noise: the variance of a mean of N independent
+/// samples, with the mean they share if they agree, of the albedos the two
+/// images' 5x5 holds) plus their rounding, the auxiliary pixel
+/// shows something else than the render (the world, an emitter or a
+/// holdout of another convention, another frame or camera) and the
+/// render's own is used. Elsewhere both estimate the same pixel albedo
+/// and are averaged with weights N^(3/2), the inverse of their stratified
+/// variance (docs/FILTER.md section 12): a noise-free auxiliary albedo is
+/// taken as it is, one of few samples beside a render of many counts
+/// less.
+///
+/// @param dst     The albedo to demodulate and remodulate by (float when
+///                allocated here), RGB; other channels copied from `aux`.
+/// @param aux     The auxiliary albedo, channels 0-2.
+/// @param render  The render's own albedo, channels 0-2. A value that is
+///                not finite leaves the auxiliary one. Neighbourhoods clip
+///                at each image's data window: to compute part of an image
+///                exactly, give both over it widened by aux_albedo_halo().
+/// @param stats   If not null, receives the counts over `roi` (within
+///                options.counted).
+ZDENOISE_API bool pool_aux_albedo(ImageBuf& dst, const ImageBuf& aux,
+                                  const ImageBuf& render,
+                                  const AuxAlbedoOptions& options = {},
+                                  AuxAlbedoStats* stats = nullptr,
+                                  ROI roi = {}, int nthreads = 0);
+
+/// How far a pixel of pool_aux_albedo() looks: 2 pixels.
+ZDENOISE_API int aux_albedo_halo();
+
 /// One layer of a layered render (docs/FILTER.md section 11): the radiance of
 /// one specular history or BSDF lobe with its own albedo (colour) pass.
 struct Layer {

@@ -3,18 +3,22 @@
     blender -b SCENE.blend -P zdenoise_aux.py -- -o AUX.exr [--samples N]
 
 Renders, with Cycles, the scene's camera at its resolution and current frame (--frame to
-choose another), with no light transport: every light hidden, a black world, no diffuse
-bounces. What is left is what Cycles' Denoising passes record: the albedo of the first
-non-specular surface each pixel sees (through sharp mirrors and glass, as Cycles' Denoising
-Albedo defines it: glossy and transmission bounces are kept for that), its normal and depth,
+choose another), with no light transport: no diffuse bounces, the lights that nothing sees
+hidden, the world and the lights a camera or mirror sees kept but lighting nothing. What is
+left is what Cycles' Denoising passes record: the albedo of the first non-specular surface
+each pixel sees (through sharp mirrors and glass, as Cycles' Denoising Albedo defines it:
+glossy, transmission and transparent bounces are kept for that), or the world's colour or
+an emitter's emission where a pixel sees those (docs/AUX.md lists each case), its normal and
+depth,
 the lobe colours (DiffCol, GlossCol, TransCol) and the Cryptomatte object ids. The samples
 only anti-alias edges and textures, so few suffice (docs/AUX.md has the measurements behind
-the default). Cycles' adaptive sampling measures the noise of Combined only, which is black
-here, so it is off: every pixel gets N samples.
+the default). Cycles' adaptive sampling measures the noise of Combined only, which holds
+no lighting here, so it is off: every pixel gets N samples.
 
 The output is a Cycles multilayer EXR (float, ZIP) with the view layer's passes:
 <layer>.Denoising Albedo.R/G/B, Denoising Normal.X/Y/Z, Denoising Depth.Z,
-DiffCol/GlossCol/TransCol.R/G/B, CryptoObject00.. and Combined (black). zdenoise finds them
+DiffCol/GlossCol/TransCol.R/G/B, CryptoObject00.. and Combined (what the camera sees
+directly: no lighting). zdenoise finds them
 by name with no flags. The .blend is not changed (nothing is saved).
 
 Options (after Blender's `--`):
@@ -55,31 +59,45 @@ def fail(message):
 
 
 def no_light(scene):
-    """Hide every light and give the scene a black world: no light transport to pay for."""
+    """Take the light transport away but keep what Cycles' Denoising Albedo records.
+
+    Cycles adds to the Denoising Albedo the emission a camera ray (or a sharp mirror or
+    glass after it) reaches: the world's colour where the sky is seen, an emitter's
+    emission, a light seen directly (integrate_background / integrate_surface_emission /
+    integrate_light in Cycles 3.4's kernel; docs/AUX.md). So the world stays, with no
+    importance sampling (then nothing samples it as a light, and its value reaches the
+    albedo whole), and so do the lights a camera or a mirror can see, with no diffuse
+    visibility; a light that nothing sees directly only lights, and is hidden."""
     for ob in scene.objects:
-        if ob.type == "LIGHT":
+        if ob.type != "LIGHT":
+            continue
+        seen = ob.visible_camera or ob.visible_glossy or ob.visible_transmission
+        if ob.hide_render or not seen:
             ob.hide_render = True
-    world = bpy.data.worlds.new("zdenoise_aux_black")
-    world.use_nodes = False
-    world.color = (0.0, 0.0, 0.0)
-    scene.world = world
+            continue
+        ob.visible_diffuse = False
+        ob.visible_volume_scatter = False
+    world = scene.world
+    if world is not None:
+        world.cycles.sampling_method = "NONE"
+        world.cycles_visibility.diffuse = False
+        world.cycles_visibility.scatter = False
 
 
 def configure(scene, args):
     scene.render.engine = "CYCLES"
     cy = scene.cycles
     cy.samples = args.samples
-    cy.use_adaptive_sampling = False  # measures Combined, which is black here
+    cy.use_adaptive_sampling = False  # measures Combined, which has no lighting here
     cy.use_denoising = False
     cy.use_guiding = False
     cy.use_fast_gi = False
-    # The Denoising Albedo follows sharp glossy and transmission bounces to the first
-    # non-specular surface; diffuse bounces and volumes only carry light, of which there is none.
+    # The Denoising Albedo follows sharp glossy, transmission and transparent bounces to the
+    # first non-specular surface, as far as the beauty's bounce limits let it: those stay as
+    # the scene has them. Diffuse and volume bounces only carry light (the albedo is written
+    # before them), of which there is none.
     cy.diffuse_bounces = 0
     cy.volume_bounces = 0
-    cy.glossy_bounces = max(cy.glossy_bounces, 1)
-    cy.transmission_bounces = max(cy.transmission_bounces, 1)
-    cy.max_bounces = max(cy.max_bounces, cy.glossy_bounces, cy.transmission_bounces)
     cy.sample_clamp_direct = 0.0
     cy.sample_clamp_indirect = 0.0
     cy.time_limit = 0.0
@@ -111,8 +129,11 @@ def configure(scene, args):
     keep = layers[0]
     for vl in scene.view_layers:
         vl.use = vl == keep
+    # With a transparent film the world reaches the albedo only when the Environment pass
+    # is written (Cycles 3.4): keep it as the beauty has it.
+    keep_passes = ("use_pass_combined", "use_pass_environment")
     for name in dir(keep):
-        if name.startswith("use_pass_") and name != "use_pass_combined":
+        if name.startswith("use_pass_") and name not in keep_passes:
             try:
                 setattr(keep, name, False)
             except (AttributeError, TypeError):

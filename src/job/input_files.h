@@ -107,6 +107,10 @@ struct RoleSelections {
     /// The auxiliary image's albedo, when it remodulates what the render's
     /// own albedo demodulated (beauty mode).
     OptionalRole remodulation { "aux albedo", Role::Albedo, false, {} };
+    /// The --in file's own albedo, when an auxiliary one demodulates: the
+    /// auxiliary albedo is checked against it and pooled with it
+    /// (albedo_plan.h).
+    OptionalRole own_albedo { "own albedo", Role::Albedo, false, {} };
     /// Motion vectors, with --temporal (docs/TEMPORAL.md).
     OptionalRole motion { "motion", Role::Motion, false, {} };
 
@@ -114,7 +118,7 @@ struct RoleSelections {
     std::vector<const OptionalRole*> optional() const
     {
         return { &normal, &depth, &id, &variance, &half_a, &half_b,
-                 &remodulation, &motion };
+                 &remodulation, &own_albedo, &motion };
     }
 };
 

@@ -31,6 +31,7 @@
 #include "options.h"
 #include "role_defaults.h"
 #include "output.h"
+#include "strip_plan.h"
 #include "strips.h"
 
 namespace zdenoise {
@@ -67,47 +68,6 @@ resolve_colour(const Job& j, InputFiles& files, colour::ColourConfig& config,
 }
 
 
-/// Everything decided before the first pixel is read.
-struct Plan {
-    bool layered = false;
-    ROI noisy;  ///< the --in file's pixels
-    RoleSelections roles;
-    colour::ColourConfig config;
-    colour::JobSpaces spaces;
-    bool managed = false;  ///< colour spaces are converted
-    /// The radiance (and halves) and the albedo need no conversion: their
-    /// images may be the files' rows.
-    bool radiance_as_is = true, albedo_as_is = true;
-    LayersPlan layers;
-    Output output;
-    int around = 0;  ///< rows a strip reads above and below its own
-    /// The filter's diagnostic maps are computed (--diagnostics, or
-    /// --diagnostics-png, whose error and stop maps of the whole frame are
-    /// kept here).
-    bool maps = false;
-    ErrorPicture picture;
-    /// Samples per pixel of the albedo's prefilter; 0: none.
-    int albedo_samples = 0;
-};
-
-
-/// The images of one strip's roles (those unused stay empty).
-struct RoleImages {
-    ImageBuf radiance, albedo, normal, depth, id, variance, half_a, half_b,
-        remodulation, motion;
-};
-
-
-/// May the optional role's image be the file's rows (no conversion)?
-bool
-role_as_is(const OptionalRole& o, const Plan& p)
-{
-    return o.role == Role::Radiance ? p.radiance_as_is
-           : o.role == Role::Albedo ? p.albedo_as_is
-                                    : true;
-}
-
-
 /// What -v says of the layers (or of their absence) and of the noise.
 void
 log_mode(const Job& j, const Convention& conv, const Plan& p,
@@ -134,25 +94,6 @@ log_mode(const Job& j, const Convention& conv, const Plan& p,
                                       + "; --mode layers uses them)");
     if (!noise_given)
         log.push_back("  noise     estimated from the image");
-}
-
-
-/// What --temporal combines frames with: the library's defaults, at the
-/// filter's albedo_eps.
-TemporalOptions
-temporal_options(const Job& j)
-{
-    TemporalOptions o;
-    o.albedo_eps = j.filter.albedo_eps;
-    return o;
-}
-
-/// Rows frame t is read with beyond what the filter reads: with
-/// --temporal, the light test's box.
-int
-temporal_reach(const Job& j)
-{
-    return j.temporal > 0 ? temporal_options(j).test_reach() : 0;
 }
 
 
@@ -252,8 +193,7 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
         if (o->used)
             show(o->label, o->selection);
     if (!p.layered)
-        p.albedo_samples = albedo_samples(j, files, p.roles.albedo,
-                                          result.log);
+        p.albedo = plan_albedo(j, files, conv, p.roles, p.noisy, result.log);
 
     const size_t mode_line = result.log.size();
     if (p.layered) {
@@ -281,8 +221,7 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
     spec.attribute("zdenoise.version", ZDENOISE_VERSION_STRING);
     std::string parameters = describe(j.filter)
                              + (p.layered ? " mode=layers" : " mode=beauty");
-    if (p.albedo_samples)
-        parameters += format(" albedo-samples={}", p.albedo_samples);
+    parameters += p.albedo.describe();
     spec.attribute("zdenoise.parameters", parameters);
 
     // Strips: their height from the memory each needs.
@@ -292,7 +231,7 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
     cost.halo   = filter_halo(j.filter);
     // The residual layer's mask looks further than the filter.
     cost.around = cost.halo + p.layers.reach
-                  + (p.albedo_samples ? albedo_prefilter_halo() : 0);
+                  + p.albedo.halo();
     add_file_costs(cost, files);
     // Role images: copies when converted or not lying together in the
     // file, else the file's rows themselves (Strip::image()). The quotient
@@ -321,8 +260,10 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
     cost.tile       = j.filter.select ? detail::kSelectionTile : detail::kFilterTile;
     cost.tile_pixel = j.filter.select ? 320.0 : 192.0;
     // The prefiltered albedo, its variance, its sums (4 doubles).
-    if (p.albedo_samples)
+    if (p.albedo.prefilter)
         cost.held_pixel += 24.0 + 32.0;
+    if (p.albedo.pool)
+        cost.held_pixel += 12.0;
     // The maps, and the filter's sums for them (5 doubles a pixel).
     p.maps = j.diagnostics || !j.diagnostics_png.empty();
     if (p.maps)
@@ -367,176 +308,6 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
 }
 
 
-/// Convert an image of `arg`'s file between colour spaces (when it is
-/// there and the job manages colour).
-void
-convert_role(const Plan& p, ImageBuf& image, const std::string& from,
-             const std::string& to, const InputArg& arg)
-{
-    std::string err;
-    if (p.managed && image.initialized()
-        && !p.config.convert_rgb(image, from, to, err))
-        fail(format("'{}': {}", arg.path, one_line(err)));
-}
-
-
-/// --temporal (docs/TEMPORAL.md): frame t's radiance (and albedo, variance
-/// or halves) averaged with its neighbours' light where they show the same
-/// surface and light, over what the filter reads of the strip. Frame t's
-/// images come over that and the light test's box around it; each
-/// neighbour is read over the rows its flow reaches (and the albedo
-/// prefilter's halo), converted and prefiltered as frame t. A flow chains
-/// the motion vectors of the frames between, nearest first.
-void
-combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
-                   const Strip& strip, RoleImages& img, JobResult& result)
-{
-    const TemporalOptions options = temporal_options(j);
-    const int halo     = filter_halo(j.filter);
-    const ROI region   = strip.widened(halo);
-    const ROI around   = strip.widened(halo + options.test_reach());
-    auto crop = [&](ImageBuf& b, const ROI& to) {
-        if (!b.initialized() || b.roi() == to)
-            return;
-        ROI r    = to;
-        r.chbegin = 0;
-        r.chend   = b.nchannels();
-        ImageBuf c;
-        if (!ImageBufAlgo::copy(c, b, TypeFloat, r, j.threads))
-            fail(format("--temporal: {}", one_line(c.geterror())));
-        b = std::move(c);
-    };
-    for (ImageBuf* b : { &img.radiance, &img.albedo, &img.normal, &img.depth,
-                         &img.id, &img.variance, &img.half_a, &img.half_b,
-                         &img.motion })
-        crop(*b, around);
-
-    const size_t n = j.neighbours.size();
-    // Nearest first, so that a flow's previous step is there.
-    std::vector<size_t> order(n);
-    for (size_t k = 0; k < n; ++k)
-        order[k] = k;
-    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-        return std::abs(j.neighbour_offsets[a]) < std::abs(j.neighbour_offsets[b]);
-    });
-    // before[k]: the neighbour one frame nearer to frame t than k (n:
-    // frame t itself), the frame its flow's last step leaves from.
-    std::vector<size_t> before(n, n);
-    for (size_t k = 0; k < n; ++k) {
-        const int o = j.neighbour_offsets[k], nearer = o - (o > 0 ? 1 : -1);
-        for (size_t m = 0; m < n; ++m)
-            if (j.neighbour_offsets[m] == nearer)
-                before[k] = m;
-    }
-    std::vector<FrameRoles> frames(n);
-    std::vector<ImageBuf> flows(n);
-    const int reach = p.albedo_samples ? albedo_prefilter_halo() : 0;
-    for (size_t k : order) {
-        const int o = j.neighbour_offsets[k], dir = o > 0 ? 1 : -1;
-        const Job& nj = j.neighbours[k];
-        if (!j.static_camera) {
-            // One step from the frame before it (frame t, or the neighbour
-            // nearer to it), by that frame's motion vectors.
-            const ImageBuf& vectors = before[k] == n ? img.motion
-                                                     : frames[before[k]].motion;
-            ImageBuf step = vector_flow(vectors, dir, j.threads);
-            if (before[k] == n) {
-                flows[k] = std::move(step);
-            } else if (!chain_flow(flows[k], flows[before[k]], step, {},
-                                   j.threads)) {
-                fail(format("--temporal: {}", one_line(flows[k].geterror())));
-            }
-        }
-        ROI rows = rows_reached(flows[k].initialized() ? &flows[k] : nullptr,
-                                around, p.noisy);
-        const ROI used = rows;
-        rows.ybegin = std::max(rows.ybegin - reach, p.noisy.ybegin);
-        rows.yend   = std::min(rows.yend + reach, p.noisy.yend);
-        try {
-            frames[k] = read_neighbour_roles(j, nj, p.roles, files, p.noisy,
-                                             rows, j.threads);
-        } catch (const Failure& f) {
-            fail(format("--temporal: neighbour frame {:+d}: {}", o, f.message));
-        }
-        FrameRoles& f = frames[k];
-        convert_role(p, f.radiance, p.spaces.input, p.spaces.working, nj.in);
-        convert_role(p, f.albedo, p.spaces.albedo, p.spaces.working, nj.albedo);
-        convert_role(p, f.half_a, p.spaces.input, p.spaces.working, nj.half_a);
-        convert_role(p, f.half_b, p.spaces.input, p.spaces.working, nj.half_b);
-        if (p.albedo_samples) {
-            ImageBuf clean;
-            if (!prefilter_albedo(clean, f.albedo, p.albedo_samples, used,
-                                  j.threads))
-                fail(format("'{}': {}", nj.albedo.path,
-                            one_line(clean.geterror())));
-            f.albedo = std::move(clean);
-            for (ImageBuf* b : { &f.radiance, &f.normal, &f.depth, &f.id,
-                                 &f.variance, &f.half_a, &f.half_b })
-                crop(*b, used);
-        }
-    }
-    auto as_frame = [&](const ImageBuf& radiance, const ImageBuf& albedo,
-                        const ImageBuf& normal, const ImageBuf& depth,
-                        const ImageBuf& id, const ImageBuf& variance,
-                        const ImageBuf& half_a, const ImageBuf& half_b) {
-        auto given = [](const ImageBuf& b) {
-            return b.initialized() ? &b : nullptr;
-        };
-        TemporalFrame f;
-        f.radiance         = &radiance;
-        f.albedo           = &albedo;
-        f.guides.normal    = given(normal);
-        f.guides.depth     = given(depth);
-        f.guides.object_id = given(id);
-        f.guides.variance  = given(variance);
-        f.guides.half_a    = given(half_a);
-        f.guides.half_b    = given(half_b);
-        return f;
-    };
-    const TemporalFrame t = as_frame(img.radiance, img.albedo, img.normal,
-                                     img.depth, img.id, img.variance,
-                                     img.half_a, img.half_b);
-    std::vector<TemporalFrame> neighbours;
-    for (size_t k = 0; k < n; ++k) {
-        const FrameRoles& f = frames[k];
-        neighbours.push_back(as_frame(f.radiance, f.albedo, f.normal, f.depth,
-                                      f.id, f.variance, f.half_a, f.half_b));
-        neighbours.back().flow = j.static_camera ? nullptr : &flows[k];
-        if (!j.static_camera && before[k] != n)
-            neighbours.back().via = int(before[k]);
-    }
-    TemporalCombined c;
-    if (!temporal_combine(c, t, neighbours, options, region, j.threads))
-        fail(format("--temporal: {}", one_line(c.radiance.geterror())));
-    img.radiance = std::move(c.radiance);
-    img.albedo   = std::move(c.albedo);
-    if (img.variance.initialized())
-        img.variance = std::move(c.variance);
-    if (img.half_a.initialized()) {
-        img.half_a = std::move(c.half_a);
-        img.half_b = std::move(c.half_b);
-    }
-    // Every image of the strip over what the filter reads.
-    for (ImageBuf* b : { &img.normal, &img.depth, &img.id, &img.remodulation,
-                         &img.motion })
-        crop(*b, region);
-    const auto stats = ImageBufAlgo::computePixelStats(c.frames);
-    if (strip.core.ybegin == p.noisy.ybegin) {
-        result.log.push_back(format("temporal  {:.2f} frames a pixel on "
-                                    "average (of {}) in the first strip",
-                                    stats.avg.empty() ? 1.0 : stats.avg[0],
-                                    n + 1));
-        // Near 0 where things move: vectors of another convention.
-        for (size_t k = 0; k < n; ++k)
-            result.log.push_back(format(
-                "temporal  frame {:+d}: the same surface at {:.0f} %, counted "
-                "at {:.0f} % of the pixels",
-                j.neighbour_offsets[k], 100.0 * c.same_surface[k],
-                100.0 * c.counted[k]));
-    }
-}
-
-
 /// Read, denoise and write strip `s` of the plan `p`; its statistics (and
 /// each layer's) are added to `result` and `layer_stats`.
 void
@@ -573,22 +344,21 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
     img.half_b   = read(roles.half_b);
     img.remodulation = read(roles.remodulation);
     img.motion       = read(roles.motion);
+    if (roles.own_albedo.used)
+        img.own_albedo = strip.image(roles.own_albedo.selection,
+                                     p.radiance_as_is);
     convert_role(p, img.radiance, p.spaces.input, p.spaces.working, j.in);
     convert_role(p, img.albedo, p.spaces.albedo, p.spaces.working, j.albedo);
     convert_role(p, img.remodulation, p.spaces.albedo, p.spaces.working, j.aux);
+    convert_role(p, img.own_albedo, p.spaces.input, p.spaces.working, j.in);
     convert_role(p, img.half_a, p.spaces.input, p.spaces.working, j.half_a);
     convert_role(p, img.half_b, p.spaces.input, p.spaces.working, j.half_b);
-    if (p.albedo_samples) {
-        // Over what the filter reads: the strip and its halo (and with
-        // --temporal, the light test's box around it).
-        ImageBuf clean;
-        const int reads = filter_halo(j.filter)
-                          + temporal_reach(j);
-        if (!prefilter_albedo(clean, img.albedo, p.albedo_samples,
-                              strip.widened(reads), j.threads))
-            fail(format("'{}': {}", j.albedo.path, one_line(clean.geterror())));
-        img.albedo = std::move(clean);
-    }
+    // Over what the filter reads: the strip and its halo (and with
+    // --temporal, the light test's box around it).
+    make_albedo(p.albedo, img.albedo, img.own_albedo,
+                strip.widened(filter_halo(j.filter) + temporal_reach(j)),
+                strip.core, j.threads, p.pooled, j.albedo.path);
+    img.own_albedo.reset();
     if (j.temporal > 0)
         combine_neighbours(j, p, files, strip, img, result);
     auto guide = [](const OptionalRole& o, const ImageBuf& image) {
@@ -665,6 +435,8 @@ run(Job j, OutputSink& sink, JobResult& result)
     std::vector<FilterStats> layer_stats;
     for (int s = 0; s < result.strips; ++s)
         run_strip(j, p, files, s, result, layer_stats);
+    if (p.albedo.pool)
+        result.log.push_back(pooled_summary(p.pooled));
     if (j.write_layers)
         for (size_t i = 0; i < layer_stats.size(); ++i) {
             const std::string& n = p.layers.layers[i].name;

@@ -191,10 +191,11 @@ options()
         { Kind::Whole, "--albedo-samples", "albedo-samples", FIELD(job.albedo_samples), "N",
           "Samples per pixel of the render's albedo, which is\n"
           "prefiltered where it is noisy (docs/FILTER.md section\n"
-          "12). Default: a Cycles file's count, for its own\n"
-          "albedo with no --aux." },
+          "12), and with --aux pooled with the aux's (docs/AUX.md).\n"
+          "Default: a Cycles file's count." },
         { Kind::Flag, "--no-albedo-prefilter", "no-albedo-prefilter", FIELD(job.no_albedo_prefilter), "",
-          "Take the albedo as it is (as an --aux image always is)." },
+          "Take the albedo as it is (with --aux: pooled, not\n"
+          "prefiltered)." },
         shown_as("--no-normal, --no-depth, --no-id", { Kind::Flag, "--no-normal", "no-normal", FIELD(job.no_normal), "",
           "Do not use the guide picked by default." }),
         { Kind::Flag, "--no-depth", "no-depth", FIELD(job.no_depth), "", nullptr },

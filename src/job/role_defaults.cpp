@@ -125,47 +125,5 @@ apply_aux(Job& j, InputFiles& files, AuxConvention& aux,
 }
 
 
-int
-albedo_samples(const Job& j, InputFiles& files, const Selection& albedo,
-               std::vector<std::string>& log)
-{
-    if (j.no_albedo_prefilter) {
-        log.push_back("  albedo    not prefiltered (--no-albedo-prefilter)");
-        return 0;
-    }
-    if (j.albedo_samples > 0) {
-        log.push_back(format("  albedo    prefiltered as {} samples a pixel "
-                             "(--albedo-samples)",
-                             j.albedo_samples));
-        return j.albedo_samples;
-    }
-    if (j.aux.given || albedo.path != j.in.path)
-        return 0;  // a clean image, or one the user chose: as it is
-    // Cycles: cycles.<view layer>.samples of the layer the albedo is of,
-    // or the only one there is (a file of one layer, its names unprefixed).
-    const InputHeader& h = files.header(albedo.path);
-    const std::string& first = h.channelnames[size_t(albedo.indices[0])];
-    const std::string own    = "cycles." + first.substr(0, first.find('.'))
-                            + ".samples";
-    std::vector<std::pair<std::string, int>> counts;
-    for (const ImageSpec& spec : h.specs)
-        for (const ParamValue& v : spec.extra_attribs) {
-            const std::string name = v.name().string();
-            if (Strutil::starts_with(name, "cycles.")
-                && Strutil::ends_with(name, ".samples"))
-                counts.emplace_back(name, Strutil::stoi(v.get_string()));
-        }
-    for (const auto& [name, n] : counts)
-        if (n >= 1 && (name == own || counts.size() == 1)) {
-            log.push_back(format("  albedo    prefiltered as {} samples a "
-                                 "pixel ({})",
-                                 n, name));
-            return n;
-        }
-    log.push_back("  albedo    not prefiltered: its samples per pixel are not "
-                  "in the file (give --albedo-samples N)");
-    return 0;
-}
-
 }  // namespace job
 }  // namespace zdenoise

@@ -37,14 +37,5 @@ void
 apply_aux(Job& j, InputFiles& files, AuxConvention& aux,
           std::string& remodulation, std::vector<std::string>& log);
 
-/// The samples per pixel the albedo prefilter (prefilter_albedo()) takes
-/// the albedo `albedo` to have, or 0 for none (--no-albedo-prefilter):
-/// --albedo-samples when given; else, for the albedo AOV of a render (the
-/// --in file's, with no --aux), the renderer's count in its metadata
-/// (Cycles' cycles.<layer>.samples). Says which in `log`.
-int
-albedo_samples(const Job& j, InputFiles& files, const Selection& albedo,
-               std::vector<std::string>& log);
-
 }  // namespace job
 }  // namespace zdenoise

@@ -1,0 +1,171 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+
+#include "albedo_plan.h"
+
+#include <OpenImageIO/strutil.h>
+
+#include "failure.h"
+
+namespace zdenoise {
+namespace job {
+
+using namespace OIIO;
+using OIIO::Strutil::fmt::format;
+
+namespace {
+
+/// The samples per pixel a Cycles file records for the layer `sel` is of
+/// (cycles.<view layer>.samples), or the only count the file has (a file
+/// of one layer, its names unprefixed); 0 when unknown. `name` gets the
+/// attribute's name.
+int
+cycles_samples(InputFiles& files, const Selection& sel, std::string& name)
+{
+    const InputHeader& h     = files.header(sel.path);
+    const std::string& first = h.channelnames[size_t(sel.indices[0])];
+    const std::string own    = "cycles." + first.substr(0, first.find('.'))
+                            + ".samples";
+    std::vector<std::pair<std::string, int>> counts;
+    for (const ImageSpec& spec : h.specs)
+        for (const ParamValue& v : spec.extra_attribs) {
+            const std::string n = v.name().string();
+            if (Strutil::starts_with(n, "cycles.")
+                && Strutil::ends_with(n, ".samples"))
+                counts.emplace_back(n, Strutil::stoi(v.get_string()));
+        }
+    for (const auto& [n, count] : counts)
+        if (count >= 1 && (n == own || counts.size() == 1)) {
+            name = n;
+            return count;
+        }
+    return 0;
+}
+
+}  // namespace
+
+
+std::string
+AlbedoPlan::describe() const
+{
+    std::string s;
+    if (pool)
+        s += format(" aux-pooled={}/{}", pool_options.render_samples,
+                    pool_options.aux_samples);
+    if (prefilter)
+        s += format(" albedo-samples={}", prefilter);
+    return s;
+}
+
+
+AlbedoPlan
+plan_albedo(const Job& j, InputFiles& files, const Convention& conv,
+            RoleSelections& roles, const ROI& noisy,
+            std::vector<std::string>& log)
+{
+    AlbedoPlan a;
+    std::string name;
+    const bool from_aux = j.aux.given && j.albedo.path == j.aux.path;
+    if (from_aux && !conv.albedo.empty()
+        && j.aux_demodulation == AuxDemodulation::Aux) {
+        roles.own_albedo.selection
+            = select_role(files, { j.in.path, conv.albedo, true },
+                          Role::Albedo, &noisy, j.in.path);
+        roles.own_albedo.used = true;
+        a.pool                = true;
+        const int nr = j.albedo_samples > 0
+                           ? j.albedo_samples
+                           : cycles_samples(files, roles.own_albedo.selection,
+                                            name);
+        const int na = cycles_samples(files, roles.albedo, name);
+        a.pool_options.render_samples = std::max(nr, 1);
+        a.pool_options.aux_samples    = na;
+        log.push_back(format(
+            "  albedo    the aux's ({}) checked against the render's own ({}) "
+            "and pooled with it where they agree",
+            na ? format("{} samples", na) : std::string("noise-free"),
+            nr ? format("{} samples", nr)
+               : std::string("samples unknown: taken as 1")));
+        // A noise-free aux albedo needs no prefilter; one of N samples
+        // pooled with the render's is one of about their sum.
+        if (!j.no_albedo_prefilter && na > 0)
+            a.prefilter = a.pool_options.render_samples + na;
+        if (a.prefilter)
+            log.push_back(format("  albedo    prefiltered as {} samples a "
+                                 "pixel (the two pooled)",
+                                 a.prefilter));
+        return a;
+    }
+    if (j.no_albedo_prefilter) {
+        log.push_back("  albedo    not prefiltered (--no-albedo-prefilter)");
+        return a;
+    }
+    if (j.albedo_samples > 0) {
+        log.push_back(format("  albedo    prefiltered as {} samples a pixel "
+                             "(--albedo-samples)",
+                             j.albedo_samples));
+        a.prefilter = j.albedo_samples;
+        return a;
+    }
+    if (j.aux.given || roles.albedo.path != j.in.path)
+        return a;  // a clean image, or one the user chose: as it is
+    a.prefilter = cycles_samples(files, roles.albedo, name);
+    log.push_back(a.prefilter
+                      ? format("  albedo    prefiltered as {} samples a "
+                               "pixel ({})",
+                               a.prefilter, name)
+                      : std::string("  albedo    not prefiltered: its samples "
+                                    "per pixel are not in the file (give "
+                                    "--albedo-samples N)"));
+    return a;
+}
+
+
+void
+make_albedo(const AlbedoPlan& a, ImageBuf& albedo, const ImageBuf& own,
+            const ROI& region, const ROI& core, int threads,
+            AuxAlbedoStats& totals, const std::string& path)
+{
+    if (a.pool) {
+        // Over what the prefilter reads of it.
+        ROI pooled_roi = region;
+        if (a.prefilter) {
+            const int h       = albedo_prefilter_halo();
+            pooled_roi        = roi_intersection(
+                ROI(region.xbegin - h, region.xend + h, region.ybegin - h,
+                    region.yend + h),
+                albedo.roi());
+        }
+        AuxAlbedoOptions o = a.pool_options;
+        o.counted          = core;
+        ImageBuf pooled;
+        AuxAlbedoStats st;
+        if (!pool_aux_albedo(pooled, albedo, own, o, &st, pooled_roi,
+                             threads))
+            fail(format("'{}': {}", path, one_line(pooled.geterror())));
+        albedo = std::move(pooled);
+        totals.pixels += st.pixels;
+        totals.rejected += st.rejected;
+    }
+    if (a.prefilter) {
+        ImageBuf clean;
+        if (!prefilter_albedo(clean, albedo, a.prefilter, region, threads))
+            fail(format("'{}': {}", path, one_line(clean.geterror())));
+        albedo = std::move(clean);
+    }
+}
+
+
+std::string
+pooled_summary(const AuxAlbedoStats& totals)
+{
+    const double share = totals.pixels ? 100.0 * double(totals.rejected)
+                                             / double(totals.pixels)
+                                       : 0.0;
+    return format("  albedo    the render's own used at {} pixels ({:.2f} %): "
+                  "the aux's disagrees there beyond their noise",
+                  totals.rejected, share);
+}
+
+}  // namespace job
+}  // namespace zdenoise

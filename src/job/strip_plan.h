@@ -1,0 +1,99 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// What plan() (job.cpp) decides before the first pixel is read, and the
+// images of one strip's roles: shared by run_strip() and the steps it
+// calls in files of their own (temporal_strip.cpp, albedo_plan.cpp).
+
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/imagebuf.h>
+
+#include <zdenoise/temporal.h>
+#include <zdenoise/zdenoise.h>
+
+#include "albedo_plan.h"
+#include "diagnostics_picture.h"
+#include "input_files.h"
+#include "job.h"
+#include "layers_plan.h"
+#include "output.h"
+#include "strips.h"
+#include "../../ocio/colour.h"
+
+namespace zdenoise {
+namespace job {
+
+/// Everything decided before the first pixel is read.
+struct Plan {
+    bool layered = false;
+    OIIO::ROI noisy;  ///< the --in file's pixels
+    RoleSelections roles;
+    colour::ColourConfig config;
+    colour::JobSpaces spaces;
+    bool managed = false;  ///< colour spaces are converted
+    /// The radiance (and halves) and the albedo need no conversion: their
+    /// images may be the files' rows.
+    bool radiance_as_is = true, albedo_as_is = true;
+    LayersPlan layers;
+    Output output;
+    int around = 0;  ///< rows a strip reads above and below its own
+    /// The filter's diagnostic maps are computed (--diagnostics, or
+    /// --diagnostics-png, whose error and stop maps of the whole frame are
+    /// kept here).
+    bool maps = false;
+    ErrorPicture picture;
+    AlbedoPlan albedo;  ///< beauty mode
+    AuxAlbedoStats pooled;  ///< over the strips, when albedo.pool
+};
+
+
+/// The images of one strip's roles (those unused stay empty).
+struct RoleImages {
+    OIIO::ImageBuf radiance, albedo, normal, depth, id, variance, half_a, half_b,
+        remodulation, own_albedo, motion;
+};
+
+
+/// May the optional role's image be the file's rows (no conversion)?
+inline bool
+role_as_is(const OptionalRole& o, const Plan& p)
+{
+    return o.role == Role::Radiance ? p.radiance_as_is
+           : o.role == Role::Albedo ? p.albedo_as_is
+                                    : true;
+}
+
+
+/// Convert an image of `arg`'s file between colour spaces (when it is
+/// there and the job manages colour).
+void
+convert_role(const Plan& p, OIIO::ImageBuf& image, const std::string& from,
+             const std::string& to, const InputArg& arg);
+
+/// What --temporal combines frames with: the library's defaults, at the
+/// filter's albedo_eps.
+TemporalOptions
+temporal_options(const Job& j);
+
+/// Rows frame t is read with beyond what the filter reads: with
+/// --temporal, the light test's box.
+int
+temporal_reach(const Job& j);
+
+/// --temporal (docs/TEMPORAL.md): frame t's radiance (and albedo, variance
+/// or halves) averaged with its neighbours' light where they show the same
+/// surface and light, over what the filter reads of the strip. Frame t's
+/// images come over that and the light test's box around it; each
+/// neighbour is read over the rows its flow reaches (and the albedo
+/// prefilter's halo), converted and prefiltered as frame t. A flow chains
+/// the motion vectors of the frames between, nearest first.
+void
+combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
+                   const Strip& strip, RoleImages& img, JobResult& result);
+
+}  // namespace job
+}  // namespace zdenoise
