@@ -1,7 +1,7 @@
 """exterior_foliage: an outdoor shot, camera at 1.2 m looking slightly up, so that about 30% of
 the frame is Nishita sky (no sun disc; sky ~1-5 linear).  A sun lamp (0.5 deg, hard shadows)
 from behind the camera lights a brick facade on the left, a paved path and a grass ground
-plane, a tree whose thin branches and ~3000 small leaf quads are seen against the sky, a
+plane, a tree whose thin branches and ~4800 small leaf quads are seen against the sky, a
 wrought-iron railing with 2 cm bars (sub-pixel to ~2 px at 384x384) against the sky on the
 right, and a row of distant buildings on the horizon.
 
@@ -85,7 +85,7 @@ mat_iron = m.out(m.principled(base=(0.03, 0.035, 0.03), rough=0.45, metal=0.6, s
 # distant buildings: plain light plaster, slightly different per building by object position
 m = C.Mat('far_buildings', 8)
 nz = m.n('ShaderNodeTexNoise', {'Vector': m.coord('Object'), 'Scale': 0.15, 'Detail': 1.0})
-mat_far = m.out(m.diffuse(m.ramp(nz.outputs['Fac'], [(0.3, (0.45, 0.42, 0.38)), (0.7, (0.70, 0.66, 0.58))])))
+mat_far = m.out(m.diffuse(m.ramp(nz.outputs['Fac'], [(0.3, (0.16, 0.15, 0.14)), (0.7, (0.34, 0.31, 0.27))])))
 
 # --- ground: grass everywhere, a paved path along the facade ----------------------------
 C.quad('grass', (-300, -300, 0), (300, -300, 0), (300, 300, 0), (-300, 300, 0), mat_grass)
@@ -126,10 +126,10 @@ def prism(p0, p1, r0, r1, n=6):
 
 
 def leaf(c):
-    """one leaf: a 9 x 5 cm quad (a slightly folded pair of triangles) at c, random orientation"""
+    """one leaf: a 12 x 7 cm quad (a slightly folded pair of triangles) at c, random orientation"""
     q = Quaternion(Vector((rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1))).normalized(),
                    rng.uniform(0, 2 * math.pi))
-    L, W = 0.09 * rng.uniform(0.8, 1.2), 0.05 * rng.uniform(0.8, 1.2)
+    L, W = 0.12 * rng.uniform(0.8, 1.2), 0.07 * rng.uniform(0.8, 1.2)
     pts = [Vector((0, 0, 0)), Vector((L / 2, W / 2, 0.008)), Vector((L, 0, 0)), Vector((L / 2, -W / 2, 0.008))]
     base = len(LV)
     for p in pts:
@@ -142,7 +142,7 @@ def branch(p, d, length, radius, level):
     prism(p, end, radius, radius * 0.7)
     if level >= 3:
         # leaves along the outer part of the twig and in a cluster around its tip
-        for _ in range(10 if level == 3 else 28):
+        for _ in range(14 if level == 3 else 40):
             t = rng.uniform(0.3, 1.0)
             off = Vector((rng.gauss(0, 1), rng.gauss(0, 1), rng.gauss(0, 1))) * (0.12 + 0.18 * t)
             leaf(p + d * length * t + off)
@@ -157,9 +157,9 @@ def branch(p, d, length, radius, level):
         branch(end, nd, length * rng.uniform(0.66, 0.78), radius * 0.6, level + 1)
 
 
-TRUNK = Vector((1.3, 2.0, 0.0))
-prism(TRUNK, TRUNK + Vector((0.05, 0.0, 2.4)), 0.17, 0.12, n=12)
-branch(TRUNK + Vector((0.05, 0.0, 2.4)), Vector((0.05, 0.0, 1.0)).normalized(), 1.5, 0.11, 0)
+TRUNK = Vector((1.1, 2.0, 0.0))
+prism(TRUNK, TRUNK + Vector((0.05, 0.0, 2.6)), 0.17, 0.12, n=12)
+branch(TRUNK + Vector((0.05, 0.0, 2.6)), Vector((0.05, 0.0, 1.0)).normalized(), 1.8, 0.11, 0)
 C.mesh_obj('tree_branches', TV, TF, mat_bark)
 C.mesh_obj('tree_leaves', LV, LF, mat_leaf)
 
