@@ -857,6 +857,33 @@ TEST_F(AuxCli, AuxCyclesFileGivesItsGuides)
 }
 
 
+// An auxiliary albedo that is 0 where the render sees light (a black world
+// behind the sky) is not let through: the render's own albedo is used
+// there, -v counts those pixels, and the output keeps the render's light
+// (docs/AUX.md, "Wrong auxiliary pixels").
+TEST_F(AuxCli, AWrongAuxPixelIsNotLetThrough)
+{
+    const std::string in = write_frame("frame.exr", s.albedo);
+    ImageBuf black_sky   = s.albedo;
+    const ROI sky(0, W, 0, 8, 0, 1, 0, 3);
+    ImageBufAlgo::fill(black_sky, { 0.0f, 0.0f, 0.0f }, sky);
+    const std::string aux = write_rgb("aux.exr", black_sky);
+    RunResult res = run("--in " + in + " --aux " + aux + " -o " + path("out.exr") + " -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    const size_t at = res.out.find("the render's own used at ");
+    ASSERT_NE(at, std::string::npos) << res.out;
+    const long rejected = std::stol(res.out.substr(at + 25));
+    EXPECT_GE(rejected, long(8 * W)) << res.out;
+    EXPECT_LE(rejected, long(9 * W)) << res.out;
+    // The sky keeps its light: within 5 % of the render's mean there (a
+    // black aux pixel would pass the noisy radiance through or remodulate
+    // it to 0).
+    const auto out  = ImageBufAlgo::computePixelStats(output("out.exr"), sky);
+    const auto want = ImageBufAlgo::computePixelStats(s.clean, sky);
+    EXPECT_NEAR(out.avg[1], want.avg[1], 0.05 * want.avg[1]);
+}
+
+
 TEST_F(AuxCli, WrongAuxIsAOneLineErrorNamingTheFile)
 {
     const std::string in = write_frame("frame.exr", own_albedo);
