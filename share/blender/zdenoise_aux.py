@@ -36,6 +36,8 @@ import time
 import bpy
 
 DEFAULT_SAMPLES = 24
+# Added to the scene's Cycles seed (any value far from the seeds renders use).
+AUX_SEED_OFFSET = 104729
 
 
 def parse_args():
@@ -98,6 +100,11 @@ def configure(scene, args):
     # before them), of which there is none.
     cy.diffuse_bounces = 0
     cy.volume_bounces = 0
+    # Samples of their own: with the beauty's seed, Cycles would place the aux's N samples
+    # where the beauty placed its first N, and the two albedos' noise would be one noise;
+    # zdenoise pools them as independent estimates (docs/AUX.md).
+    cy.use_animated_seed = False
+    cy.seed = (cy.seed + AUX_SEED_OFFSET) % (2 ** 31)
     cy.sample_clamp_direct = 0.0
     cy.sample_clamp_indirect = 0.0
     cy.time_limit = 0.0

@@ -122,19 +122,28 @@ plan_albedo(const Job& j, InputFiles& files, const Convention& conv,
 
 
 void
-make_albedo(const AlbedoPlan& a, ImageBuf& albedo, const ImageBuf& own,
-            const ROI& region, const ROI& core, int threads,
-            AuxAlbedoStats& totals, const std::string& path)
+make_albedo(const AlbedoPlan& a, ImageBuf& albedo, ImageBuf& own,
+            const ROI& region, const ROI& core,
+            int threads, AuxAlbedoStats& totals, const std::string& path)
 {
+    auto prefilter = [&](ImageBuf& img, int samples) {
+        if (!samples)
+            return;
+        ImageBuf clean;
+        if (!prefilter_albedo(clean, img, samples, region, threads))
+            fail(format("'{}': {}", path, one_line(clean.geterror())));
+        img = std::move(clean);
+    };
     if (a.pool) {
         // Over what the prefilter reads of it.
         ROI pooled_roi = region;
         if (a.prefilter) {
-            const int h       = albedo_prefilter_halo();
-            pooled_roi        = roi_intersection(
-                ROI(region.xbegin - h, region.xend + h, region.ybegin - h,
-                    region.yend + h),
-                albedo.roi());
+            const int h = albedo_prefilter_halo();
+            pooled_roi  = roi_intersection(ROI(region.xbegin - h,
+                                               region.xend + h,
+                                               region.ybegin - h,
+                                               region.yend + h),
+                                           albedo.roi());
         }
         AuxAlbedoOptions o = a.pool_options;
         o.counted          = core;
@@ -147,12 +156,10 @@ make_albedo(const AlbedoPlan& a, ImageBuf& albedo, const ImageBuf& own,
         totals.pixels += st.pixels;
         totals.rejected += st.rejected;
     }
-    if (a.prefilter) {
-        ImageBuf clean;
-        if (!prefilter_albedo(clean, albedo, a.prefilter, region, threads))
-            fail(format("'{}': {}", path, one_line(clean.geterror())));
-        albedo = std::move(clean);
-    }
+    prefilter(albedo, a.prefilter);
+    // A swap, not a move: OIIO 2.4 leaves a moved-from ImageBuf without
+    // its implementation, and its reset() then crashes.
+    ImageBuf().swap(own);
 }
 
 

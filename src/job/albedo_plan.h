@@ -50,11 +50,12 @@ plan_albedo(const Job& j, InputFiles& files, const Convention& conv,
             std::vector<std::string>& log);
 
 /// The strip's albedo by plan `a`, over `region` (what the filter reads):
-/// `albedo` pooled with `own`, then prefiltered. The pixels rejected among
-/// `core` are added to `totals`. Fails naming `path` (the albedo's file).
+/// `albedo` pooled with `own` (which is then freed), then prefiltered.
+/// The pixels rejected among `core` are added to `totals`. Fails naming
+/// `path` (the albedo's file).
 void
 make_albedo(const AlbedoPlan& a, OIIO::ImageBuf& albedo,
-            const OIIO::ImageBuf& own, const OIIO::ROI& region,
+            OIIO::ImageBuf& own, const OIIO::ROI& region,
             const OIIO::ROI& core, int threads, AuxAlbedoStats& totals,
             const std::string& path);
 

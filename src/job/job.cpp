@@ -358,7 +358,6 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
     make_albedo(p.albedo, img.albedo, img.own_albedo,
                 strip.widened(filter_halo(j.filter) + temporal_reach(j)),
                 strip.core, j.threads, p.pooled, j.albedo.path);
-    img.own_albedo.reset();
     if (j.temporal > 0)
         combine_neighbours(j, p, files, strip, img, result);
     auto guide = [](const OptionalRole& o, const ImageBuf& image) {
