@@ -30,7 +30,7 @@ rng = random.Random(4242)                      # geometry only, never the --seed
 # grass: two noise scales over a green ramp, plus darker Voronoi clumps
 m = C.Mat('grass', 1)
 uv = m.uv2('xy', 1.0)
-nz = m.n('ShaderNodeTexNoise', {'Vector': uv, 'Scale': 3.0, 'Detail': 8.0, 'Roughness': 0.6})
+nz = m.n('ShaderNodeTexNoise', {'Vector': uv, 'Scale': 3.0, 'Detail': 4.0, 'Roughness': 0.6})
 nf = m.n('ShaderNodeTexNoise', {'Vector': uv, 'Scale': 90.0, 'Detail': 2.0})
 g = m.ramp(nz.outputs['Fac'], [(0.3, (0.06, 0.13, 0.03)), (0.7, (0.20, 0.26, 0.06))])
 col = m.mix(0.5, g, nf.outputs['Fac'], 'MULTIPLY')
@@ -66,7 +66,7 @@ sep = m.n('ShaderNodeSeparateXYZ', {0: m.coord('Object')})
 v = m.n('ShaderNodeCombineXYZ', {0: m.math('MULTIPLY', sep.outputs[0], 25.0),
                                   1: m.math('MULTIPLY', sep.outputs[1], 25.0),
                                   2: m.math('MULTIPLY', sep.outputs[2], 4.0)})
-nz = m.n('ShaderNodeTexNoise', {'Vector': v, 'Scale': 1.0, 'Detail': 6.0})
+nz = m.n('ShaderNodeTexNoise', {'Vector': v, 'Scale': 1.0, 'Detail': 3.0})
 mat_bark = m.out(m.diffuse(m.ramp(nz.outputs['Fac'], [(0.35, (0.07, 0.05, 0.035)), (0.65, (0.22, 0.17, 0.12))])))
 
 # leaves: per-leaf colour (random per-island via the leaf's own object-space position noise),
@@ -182,5 +182,5 @@ elev = math.degrees(math.asin(to_sun.z))
 rot = math.degrees(math.atan2(to_sun.y, to_sun.x)) - 90.0   # Nishita sun azimuth = rotation + 90 deg
 C.world_sky(1.0, elev, rot % 360.0, sun_disc=False)
 
-C.camera((0.3, -9.0, 1.2), (0.3, 0.0, 2.0), 55.0)
+C.camera((0.3, -9.0, 1.2), (0.3, 0.0, 2.4), 55.0)
 C.render(args)
