@@ -911,6 +911,56 @@ TEST_F(AuxCli, WrongAuxIsAOneLineErrorNamingTheFile)
 }
 
 
+// An aux of another shot is refused with one line naming both files:
+// another resolution (even one whose pixels would cover the render's),
+// another camera, another frame. The same camera and frame pass.
+TEST_F(AuxCli, AnAuxOfAnotherShotIsRefusedNamingBoth)
+{
+    auto with = [&](const std::string& from, const std::string& name,
+                    const std::string& camera, const std::string& frame) {
+        ImageBuf img(from);
+        EXPECT_TRUE(img.read(0, 0, true, TypeFloat)) << img.geterror();
+        img.specmod().attribute("Camera", camera);
+        img.specmod().attribute("Frame", frame);
+        EXPECT_TRUE(img.write(path(name))) << img.geterror();
+        return path(name);
+    };
+    const std::string in = with(write_frame("frame0.exr", own_albedo), "frame.exr",
+                                "Camera", "001");
+    const std::string aux = write_frame("aux0.exr", s.albedo);
+    const std::string same = with(aux, "same.exr", "Camera", "001");
+    RunResult res = run("--in " + in + " --aux " + same + " -o " + path("o.exr"));
+    EXPECT_EQ(res.status, 0) << res.err;
+
+    struct {
+        const char* name;
+        const char* camera;
+        const char* frame;
+        const char* says;
+    } cases[] = { { "cam2.exr", "Camera.001", "001", "camera 'Camera.001'" },
+                  { "frame2.exr", "Camera", "002", "frame '002'" } };
+    for (const auto& c : cases) {
+        res = run("--in " + in + " --aux " + with(aux, c.name, c.camera, c.frame) + " -o "
+                  + path("o.exr"));
+        expect_one_line_error(res, c.name);
+        EXPECT_NE(res.err.find(c.says), std::string::npos) << res.err;
+        EXPECT_NE(res.err.find(in), std::string::npos) << res.err;
+        EXPECT_EQ(res.status, 1);
+    }
+
+    // Twice the resolution: its pixels cover the render's, but it is
+    // another frame.
+    write_image("double.exr", 2 * W, 2 * H, { "R", "G", "B" }, 0.5f);
+    res = run("--in " + in + " --aux " + path("double.exr") + " -o " + path("o.exr"));
+    expect_one_line_error(res, "double.exr");
+    EXPECT_NE(res.err.find(std::to_string(2 * W) + "x" + std::to_string(2 * H)),
+              std::string::npos)
+        << res.err;
+    EXPECT_NE(res.err.find(in), std::string::npos) << res.err;
+    EXPECT_EQ(res.status, 1);
+}
+
+
 // --mode layers with --aux: the auxiliary image's lobe colours remodulate
 // their layers (Cycles' Dir/Ind come divided, so the aux colour only
 // multiplies back), and a lobe it has no colour for keeps its own.

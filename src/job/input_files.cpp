@@ -3,6 +3,9 @@
 
 #include "input_files.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagecache.h>
 #include <OpenImageIO/strutil.h>
@@ -197,6 +200,82 @@ select_role(InputFiles& files, const InputArg& arg, Role role,
             s.names[k] = h.channelnames[size_t(s.indices[k])];
     files.want(arg.path, s.indices);
     return s;
+}
+
+
+namespace {
+
+/// Attribute `name` of `s` as text ("" when absent): strings as they are,
+/// numbers and matrices as OIIO prints them.
+std::string
+attribute_text(const ImageSpec& s, const char* name)
+{
+    const ParamValue* p = s.find_attribute(name);
+    return p ? p->get_string() : std::string();
+}
+
+
+/// Do two float attributes (matrices, vectors) agree to `rel` of their
+/// size? Renderers write the same camera with rounding of their own.
+bool
+same_floats(const ParamValue& a, const ParamValue& b, float rel)
+{
+    if (a.type().basetype != TypeDesc::FLOAT
+        || b.type().basetype != TypeDesc::FLOAT
+        || a.type().numelements() * a.type().aggregate
+               != b.type().numelements() * b.type().aggregate)
+        return a.get_string() == b.get_string();
+    const size_t n = a.type().numelements() * a.type().aggregate;
+    const float* x = static_cast<const float*>(a.data());
+    const float* y = static_cast<const float*>(b.data());
+    for (size_t i = 0; i < n; ++i)
+        if (std::abs(x[i] - y[i])
+            > rel * std::max(1.0f, std::max(std::abs(x[i]), std::abs(y[i]))))
+            return false;
+    return true;
+}
+
+}  // namespace
+
+
+void
+check_same_shot(InputFiles& files, const std::string& aux,
+                const std::string& in)
+{
+    const ImageSpec& a = files.header(aux).spec;
+    const ImageSpec& r = files.header(in).spec;
+    auto refuse = [&](const std::string& what, const std::string& va,
+                      const std::string& vr) {
+        fail(format("aux '{}' is {} {}, but the render '{}' is {}: render "
+                    "the aux from the render's shot",
+                    aux, what, va, in, vr));
+    };
+    const ROI da(a.full_x, a.full_x + a.full_width, a.full_y,
+                 a.full_y + a.full_height);
+    const ROI dr(r.full_x, r.full_x + r.full_width, r.full_y,
+                 r.full_y + r.full_height);
+    if (!same_pixels(da, dr))
+        refuse("a frame (display window) of", window_text(da),
+               window_text(dr));
+    // Blender writes the camera's name and the frame; Arnold, RenderMan
+    // and OIIO's convention the camera's matrices; overscan and a lens
+    // shift change the screen window.
+    for (const char* name : { "Camera", "Frame" }) {
+        const std::string va = attribute_text(a, name);
+        const std::string vr = attribute_text(r, name);
+        if (!va.empty() && !vr.empty() && va != vr)
+            refuse(format("of {}", Strutil::lower(name)), "'" + va + "'",
+                   "'" + vr + "'");
+    }
+    for (const char* name : { "worldToCamera", "worldToNDC",
+                              "screenWindowCenter", "screenWindowWidth",
+                              "PixelAspectRatio" }) {
+        const ParamValue* pa = a.find_attribute(name);
+        const ParamValue* pr = r.find_attribute(name);
+        if (pa && pr && !same_floats(*pa, *pr, 1e-4f))
+            refuse(format("of {}", name), pa->get_string(),
+                   pr->get_string());
+    }
 }
 
 

@@ -136,6 +136,16 @@ Selection
 select_role(InputFiles& files, const InputArg& arg, Role role,
             const OIIO::ROI* noisy, const std::string& reference_path);
 
+/// Is the auxiliary render `aux` a render of the --in file's shot? Refused
+/// with a one-line error naming both files when the two headers say
+/// otherwise: another display window (resolution, overscan), pixel aspect
+/// or screen window, another camera (its name, or its worldToCamera /
+/// worldToNDC matrices), another frame. What a header does not carry is
+/// not compared: a file without metadata passes on its size alone.
+void
+check_same_shot(InputFiles& files, const std::string& aux,
+                const std::string& in);
+
 /// The selections of `selections` ('+' between them) of the --in file,
 /// each R,G,B: the terms of a sum. Their channels are added to `shown`.
 std::vector<Selection>

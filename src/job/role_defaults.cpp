@@ -94,6 +94,7 @@ void
 apply_aux(Job& j, InputFiles& files, AuxConvention& aux,
           std::string& remodulation, std::vector<std::string>& log)
 {
+    check_same_shot(files, j.aux.path, j.in.path);
     const InputHeader& h = files.header(j.aux.path);
     std::string err;
     if (!detect_aux(h.channelnames, aux, err))
