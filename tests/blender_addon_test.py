@@ -5,7 +5,8 @@
 
 Builds a tiny Cycles scene (64x64: a checkered plane, a sphere, an area light; 4 samples,
 a fixed seed), renders it with the add-on on and checks the image 'zdenoise' against the
-noisy render and a 256-sample one; then the output path, the auxiliary render, the errors.
+noisy render and a 256-sample one; then the output path, the auxiliary render (the same
+result as the README's two commands on the same scene and render), the errors.
 Leaves SCRATCH/scene.blend (the add-on on, an output path with '#') for the shell's
 `-f` and `-a` runs.
 """
@@ -227,6 +228,31 @@ check(flat_aux * 3 <= flat_noisy, "with --aux on the flat region at least 3x clo
 check(abs(aux[..., :3].mean() / mean_noisy - 1) < 0.05, "with --aux the mean is within 5 %")
 s.use_aux = False
 s.mode = "beauty"
+
+# The aux box gives what the README's two commands give on the same scene and render:
+# `blender -b shot.blend -P zdenoise_aux.py -- -o aux.exr` and `zdenoise --in render.exr
+# --aux aux.exr` (here with the box's samples and mode). The Render Result still holds the
+# render the add-on denoised; the add-on's own writer saves it as the command's input.
+import subprocess  # noqa: E402
+import zdenoise_addon  # noqa: E402
+cmd_dir = os.path.join(scratch, "command")
+os.makedirs(cmd_dir)
+zdenoise_addon.save_render_result(scene, os.path.join(cmd_dir, "render.exr"))
+bpy.ops.wm.save_as_mainfile(filepath=os.path.join(cmd_dir, "shot.blend"), copy=True)
+aux_script = zdenoise_addon.find_aux_script(None)[0]
+subprocess.run([bpy.app.binary_path, "-b", "--factory-startup", "-noaudio",
+                os.path.join(cmd_dir, "shot.blend"), "--python-exit-code", "1", "-P",
+                aux_script, "--", "-o", os.path.join(cmd_dir, "aux.exr"),
+                "--samples", "8"], check=True, stdout=subprocess.DEVNULL)
+subprocess.run([os.environ["ZDENOISE_EXECUTABLE"], "--in", os.path.join(cmd_dir, "render.exr"),
+                "--mode", "layers", "--aux", os.path.join(cmd_dir, "aux.exr"), "-o",
+                os.path.join(cmd_dir, "denoised.exr")], check=True, stdout=subprocess.DEVNULL)
+planes = zdenoise_addon.read_exr_channels(
+    os.path.join(cmd_dir, "denoised.exr"), [f"ViewLayer.Combined.{c}" for c in "RGB"])
+command = np.stack([planes[f"ViewLayer.Combined.{c}"] for c in "RGB"], axis=-1)[::-1]
+gap = float(np.abs(command - aux[..., :3]).max() / max(float(command.max()), 1e-6))
+print(f"the aux box against the two commands: largest difference {gap:.2e} of the peak")
+check(gap < 1e-4, "the aux box gives the commands' result")
 
 # The compositor on (its 'Composite' layer comes first in the EXR) and a second view layer
 # ('Another', which EXR's sorted layers also put first): zdenoise denoises 'Another', the
