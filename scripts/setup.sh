@@ -5,6 +5,8 @@ set -euo pipefail
 packages=(g++ cmake make pkg-config libopenimageio-dev libopenexr-dev
           openimageio-tools python3-openimageio nlohmann-json3-dev libgtest-dev
           libopencolorio-dev opencolorio-tools libbenchmark-dev
+          # Google Highway: the filter's vector kernels, dispatched at run time
+          libhwy-dev
           # the Python module (python/) and its tests
           pybind11-dev python3-dev python3-numpy
           # the fuzz targets (scripts/fuzz.sh, CI)

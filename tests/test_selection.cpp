@@ -18,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include <zdenoise/selection.h>
+#include <zdenoise/simd.h>
 #include <zdenoise/zdenoise.h>
 
 #include "reference_filter.h"
@@ -198,6 +199,46 @@ TEST(FeatureRegression, MatchesTheReference)
             EXPECT_LT(max_difference(got, ref, 3, 1.0), 1e-4);
             EXPECT_LT(max_difference(got, ref, 4, 1.0), 1e-4) << "hat diagonal";
         }
+}
+
+// Every instruction set the kernels are compiled for that this CPU runs
+// (AVX-512, AVX2, SSE4, the portable scalar code) gives the reference's
+// result, and the sets agree with each other within float rounding.
+TEST(FeatureRegression, EveryInstructionSetMatchesTheReference)
+{
+    const synth::Scene s = synth::staircase(40, 26, 6, { 8, 31 });
+    const Quotient q(s);
+    const RefImage n = zdenoise_ref::from_imagebuf(s.normal);
+    const RefImage d = zdenoise_ref::from_imagebuf(s.depth);
+    const RefImage id = zdenoise_ref::from_imagebuf(s.object_id);
+    const ImageBuf zb = zdenoise_ref::to_imagebuf(q.z), pb = zdenoise_ref::to_imagebuf(q.pilot);
+    const ImageBuf ab = zdenoise_ref::to_imagebuf(q.albedo);
+    zdenoise_ref::RefGuides rg;
+    rg.normal = &n, rg.depth = &d, rg.object_id = &id;
+    zdenoise::Guides g;
+    g.normal = &s.normal, g.depth = &s.depth, g.object_id = &s.object_id;
+    const zdenoise::FeatureRegressionOptions o = small_windows();
+    const RefImage ref = zdenoise_ref::feature_regression(q.z, q.albedo, q.pilot, rg, o);
+    const std::vector<std::string> targets = zdenoise::simd_targets();
+    ASSERT_FALSE(targets.empty());
+    EXPECT_TRUE(targets.back() == "SCALAR" || targets.back() == "EMU128")
+        << "the portable code is always there, last: " << targets.back();
+    std::vector<RefImage> got;
+    for (const std::string& t : targets) {
+        SCOPED_TRACE(t);
+        ASSERT_TRUE(zdenoise::set_simd_target(t));
+        EXPECT_EQ(zdenoise::simd_target(), t);
+        ImageBuf lib;
+        ASSERT_TRUE(zdenoise::feature_regression(lib, zb, ab, pb, g, o)) << lib.geterror();
+        got.push_back(zdenoise_ref::from_imagebuf(lib));
+        EXPECT_LT(max_difference(got.back(), ref, 3, 1.0), 1e-4);
+        EXPECT_LT(max_difference(got.back(), ref, 4, 1.0), 1e-4) << "hat diagonal";
+        EXPECT_LT(max_difference(got.back(), got.front(), 4, 1.0), 1e-5)
+            << "against " << targets.front();
+    }
+    EXPECT_FALSE(zdenoise::set_simd_target("no such set"));
+    ASSERT_TRUE(zdenoise::set_simd_target(""));
+    EXPECT_EQ(zdenoise::simd_target(), targets.front());
 }
 
 // The filter is linear in z (its weights read the pilot, never z), so D is

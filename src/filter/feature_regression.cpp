@@ -6,11 +6,13 @@
 // window a first-order weighted least-squares fit of the quotient on the
 // features, with patch weights on a pilot estimate, splatted with the same
 // weights. Stages, in order:
-//   decode_points()   z, pilot, features and validity over the region
-//   window_weights()  one centre's patch weights, row by row
-//   fit_window()      its normal equations, Cholesky and M^-1
-//   splat_window()    its predictions, clamped, and its hat diagonal
-//   normalise()       acc / wsum and hsum / wsum per output pixel
+//   decode_points()   planes of z, pilot, guides and validity over the region
+//   window_weights()  one centre's patch weights (feature_regression_kernels)
+//   window_sums()     its normal equations (likewise)
+//   solve_window()    ridge, Cholesky, M^-1 and beta, in double
+//   window_splat()    its predictions, clamped, and its hat diagonal
+//                     (feature_regression_kernels), added to the sums
+//   the last loop     acc / wsum and hsum / wsum per output pixel
 
 #include <zdenoise/selection.h>
 
@@ -21,235 +23,205 @@
 
 #include <OpenImageIO/imagebufalgo_util.h>
 
+#include "feature_regression_kernels.h"
 #include "filter_inputs.h"
 #include "internal.h"
 
 namespace zdenoise {
 
 using namespace OIIO;
+using namespace detail;
 
 namespace {
 
-constexpr int kMaxFeatures = 7;  ///< 1, dx, dy, normal (3), inverse depth
-
-/// The inputs over the region, row-major.
+/// The region's planes (FeaturePlanes points into them), row-major, each
+/// with kFeaturePlanePadding zeros after its last pixel.
 struct Points {
     ROI region;
     int width = 0;
-    int nfeatures = 3;
-    std::vector<float> z;        ///< 3 a pixel
-    std::vector<float> scale;    ///< La + albedo_eps, 3 a pixel: z to radiance
-    std::vector<uint8_t> valid;  ///< takes part in fits
-    std::vector<float> pilot_l;  ///< pilot luminance
-    std::vector<float> pilot_v;  ///< variance of pilot_l
-    std::vector<float> normal;   ///< unit, 3 a pixel (empty: none)
-    std::vector<float> invdepth; ///< 1/depth (empty: none)
-    std::vector<uint32_t> id;    ///< bits of channel 0 (empty: none)
+    int patch_radius = 0;
+    bool has_normal = false, has_depth = false;
+    std::vector<float> quotient;  ///< as read, 3 a pixel: what passes through
+    std::vector<float> valid, z[3], radiance[3], inv_scale[3], normal[3], invdepth;
+    std::vector<uint32_t> id;
+    std::vector<float> pilot_l, pilot_v, pilot_in;  ///< grown by patch_radius
     size_t index(int x, int y) const
     {
         return size_t(y - region.ybegin) * size_t(width)
                + size_t(x - region.xbegin);
+    }
+    FeaturePlanes planes() const
+    {
+        FeaturePlanes p;
+        p.width = width;
+        p.valid = valid.data();
+        p.id    = id.empty() ? nullptr : id.data();
+        for (int c = 0; c < 3; ++c) {
+            p.z[c]         = z[c].data();
+            p.radiance[c]  = radiance[c].data();
+            p.inv_scale[c] = inv_scale[c].data();
+            p.normal[c]    = has_normal ? normal[c].data() : nullptr;
+        }
+        p.invdepth    = has_depth ? invdepth.data() : nullptr;
+        p.pilot_l     = pilot_l.data();
+        p.pilot_v     = pilot_v.data();
+        p.pilot_in    = pilot_in.data();
+        p.pilot_width = width + 2 * patch_radius;
+        return p;
     }
 };
 
 Points
 decode_points(const ImageBuf& quotient, const ImageBuf& albedo,
               const ImageBuf& pilot, const Guides& guides, const ROI& region,
-              float albedo_eps)
+              float albedo_eps, int patch_radius)
 {
     Points p;
     p.region = region;
     p.width  = region.width();
-    const size_t npix = region.npixels();
-    p.z = detail::read_channels(quotient, region, 0, 3);
-    p.scale = detail::read_channels(albedo, region, 0, 3);
-    for (float& a : p.scale)
-        a += albedo_eps;
+    p.patch_radius = patch_radius;
+    p.has_normal = guides.normal != nullptr;
+    p.has_depth = guides.depth != nullptr;
+    const size_t npix = region.npixels(), padded = npix + kFeaturePlanePadding;
+    p.quotient = detail::read_channels(quotient, region, 0, 3);
+    const std::vector<float>& zq = p.quotient;
+    const std::vector<float> al = detail::read_channels(albedo, region, 0, 3);
     const std::vector<float> pl = detail::read_channels(pilot, region, 0, 4);
-    p.pilot_l.resize(npix);
-    p.pilot_v.resize(npix);
-    p.valid.assign(npix, 0);
-    std::vector<float> depth;
+    std::vector<float> depth, normal;
     if (guides.depth)
         depth = detail::read_channels(*guides.depth, region, 0, 1);
-    if (guides.normal) {
-        p.normal = detail::read_channels(*guides.normal, region, 0, 3);
-        p.nfeatures += 3;
+    if (guides.normal)
+        normal = detail::read_channels(*guides.normal, region, 0, 3);
+    p.valid.assign(padded, 0.0f);
+    for (int c = 0; c < 3; ++c) {
+        p.z[c].assign(padded, 0.0f);
+        p.radiance[c].assign(padded, 0.0f);
+        p.inv_scale[c].assign(padded, 0.0f);
+        if (p.has_normal)
+            p.normal[c].assign(padded, 0.0f);
     }
-    if (guides.depth) {
-        p.invdepth.assign(npix, 0.0f);
-        p.nfeatures += 1;
-    }
+    if (p.has_depth)
+        p.invdepth.assign(padded, 0.0f);
     if (guides.object_id) {
         const std::vector<float> ids = detail::read_channels(*guides.object_id, region, 0, 1);
-        p.id.resize(npix);
+        p.id.assign(padded, 0u);
         std::memcpy(p.id.data(), ids.data(), npix * 4);
     }
+    const int pr = patch_radius, pw = p.width + 2 * pr;
+    const size_t npilot = size_t(pw) * size_t(region.height() + 2 * pr);
+    p.pilot_l.assign(npilot + kFeaturePlanePadding, 0.0f);
+    p.pilot_v.assign(npilot + kFeaturePlanePadding, 0.0f);
+    p.pilot_in.assign(npilot + kFeaturePlanePadding, 0.0f);
     for (size_t i = 0; i < npix; ++i) {
         const float* pi = &pl[4 * i];
-        p.pilot_l[i] = detail::luminance(pi);
-        p.pilot_v[i] = std::isfinite(pi[3]) && pi[3] > 0.0f ? pi[3] : 0.0f;
-        bool ok = std::isfinite(p.pilot_l[i]);
-        for (int c = 0; c < 3; ++c)
-            ok = ok && std::isfinite(p.z[3 * i + c])
-                 && std::fabs(p.z[3 * i + c]) < detail::kLargestFitQuotient
-                 && p.scale[3 * i + c] > 0.0f && std::isfinite(p.scale[3 * i + c]);
-        if (!p.normal.empty()) {
-            float* n = &p.normal[3 * i];
-            const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-            if (len >= 1e-6f && std::isfinite(len))
-                n[0] /= len, n[1] /= len, n[2] /= len;
-            else
-                n[0] = n[1] = n[2] = 0.0f;
+        const size_t pj = (i / size_t(p.width) + size_t(pr)) * size_t(pw)
+                          + i % size_t(p.width) + size_t(pr);
+        const float l = detail::luminance(pi);
+        p.pilot_l[pj]  = l;
+        p.pilot_v[pj]  = std::isfinite(pi[3]) && pi[3] > 0.0f ? pi[3] : 0.0f;
+        p.pilot_in[pj] = 1.0f;
+        bool ok = std::isfinite(l);
+        float scale[3];
+        for (int c = 0; c < 3; ++c) {
+            scale[c] = al[3 * i + c] + albedo_eps;
+            ok = ok && std::isfinite(zq[3 * i + c])
+                 && std::fabs(zq[3 * i + c]) < detail::kLargestFitQuotient
+                 && scale[c] > 0.0f && std::isfinite(scale[c]);
         }
+        float invd = 0.0f;
         if (!depth.empty()) {
             const float d = depth[i];
             if (d > 0.0f && d < 1e9f && std::isfinite(d))
-                p.invdepth[i] = 1.0f / d;
+                invd = 1.0f / d;
             else
                 ok = false;
         }
-        p.valid[i] = ok;
+        if (!ok)
+            continue;  // every plane stays 0: the point takes no part
+        p.valid[i] = 1.0f;
+        for (int c = 0; c < 3; ++c) {
+            p.z[c][i]         = zq[3 * i + c];
+            p.radiance[c][i]  = zq[3 * i + c] * scale[c];
+            p.inv_scale[c][i] = 1.0f / scale[c];
+        }
+        if (p.has_depth)
+            p.invdepth[i] = invd;
+        if (p.has_normal) {
+            const float* n = &normal[3 * i];
+            const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            if (len >= 1e-6f && std::isfinite(len))
+                for (int c = 0; c < 3; ++c)
+                    p.normal[c][i] = n[c] / len;
+        }
     }
     return p;
 }
 
-/// One window's fit: its centre, the solved coefficients and the Cholesky
-/// factor of its normal matrix (for the hat diagonal).
-struct WindowFit {
-    int x0 = 0, y0 = 0;
-    int nf = 0;
-    /// The weight of each point of the window, (2 r + 1)^2 in rows: the
-    /// fit computes them and the splat reuses them (the patch distances
-    /// are most of the work).
-    std::vector<float> weight;
-    /// Scratch of window_weights(): each point's patch distance sum and
-    /// its number of terms.
-    std::vector<float> distance, terms;
-    double beta[kMaxFeatures][3] = {};
-    double chol[kMaxFeatures][kMaxFeatures] = {};
-    /// M^-1 as the quadratic form x^T M^-1 x: diagonal, then twice each
-    /// off-diagonal entry (a > b); independent products, not the
-    /// dependent chain of a triangular solve per splatted point.
-    double inverse[kMaxFeatures][kMaxFeatures] = {};
-    float lo[3] = {}, hi[3] = {};  ///< range of the radiance of the weighted points
+/// One lattice row's scratch: a window's weights and splat, rows of
+/// row_stride.
+struct WindowScratch {
+    int row_stride = 0;
+    std::vector<float> weight, splat[kSplatPlanes];
+    explicit WindowScratch(int radius)
+    {
+        const int side = 2 * radius + 1;
+        row_stride = (side + kFeaturePlanePadding - 1) / kFeaturePlanePadding
+                         * kFeaturePlanePadding + kFeaturePlanePadding;
+        const size_t n = size_t(side) * size_t(row_stride);
+        weight.assign(n, 0.0f);
+        for (auto& plane : splat)
+            plane.assign(n, 0.0f);
+    }
 };
 
-/// The features of point j for the window centred on i0, relative to the
-/// centre (so that the constant term is the fit's value at the centre).
-int
-features(const Points& p, size_t i0, size_t j, int dx, int dy, float inv_r,
-         double* x)
+/// The window centred on (x0, y0), clipped to the region.
+WindowExtent
+window_extent(const Points& p, int x0, int y0, int r, int row_stride)
 {
-    int n = 0;
-    x[n++] = 1.0;
-    x[n++] = dx * inv_r;
-    x[n++] = dy * inv_r;
-    if (!p.normal.empty())
-        for (int c = 0; c < 3; ++c)
-            x[n++] = double(p.normal[3 * j + c]) - p.normal[3 * i0 + c];
-    if (!p.invdepth.empty())
-        x[n++] = (double(p.invdepth[j]) - p.invdepth[i0]) / p.invdepth[i0];
-    return n;
+    const ROI& g = p.region;
+    WindowExtent e;
+    e.x0 = x0 - g.xbegin, e.y0 = y0 - g.ybegin, e.radius = r;
+    e.xlo = std::max(x0 - r, g.xbegin) - g.xbegin;
+    e.xhi = std::min(x0 + r, g.xend - 1) - g.xbegin;
+    e.ylo = std::max(y0 - r, g.ybegin) - g.ybegin;
+    e.yhi = std::min(y0 + r, g.yend - 1) - g.ybegin;
+    e.centre = p.index(x0, y0);
+    e.row_stride = row_stride;
+    return e;
 }
 
-/// The weight of every point of the window centred on (x0, y0) into
-/// fit.weight: spatial Gaussian x same id x the patch weight
-/// exp(-max(0, d2)), d2 the variance-cancelled distance of the pilot's
-/// patches (FILTER.md 13.2). The distance is summed patch offset by patch
-/// offset over whole window rows, contiguous points in float lanes (each
-/// point's terms in the same order as a point-by-point sum).
+/// The centre's patch offsets that lie in the region, as shifts in the
+/// pilot planes.
 void
-window_weights(const Points& p, const FeatureRegressionOptions& o,
-               const ROI& clip, int x0, int y0, WindowFit& fit)
+centre_patch(const Points& p, int x0, int y0, CentrePatch& patch)
 {
-    const int r = o.radius, side = 2 * r + 1, pr = o.patch_radius;
-    const ROI& region = p.region;
-    const int ylo = std::max(y0 - r, clip.ybegin), yhi = std::min(y0 + r, clip.yend - 1);
-    const int xlo = std::max(x0 - r, clip.xbegin), xhi = std::min(x0 + r, clip.xend - 1);
-    const size_t n = size_t(side) * size_t(side);
-    fit.weight.assign(n, 0.0f);
-    fit.distance.assign(n, 0.0f);
-    fit.terms.assign(n, 0.0f);
-    const float k2 = o.patch_k * o.patch_k;
-    auto at = [&](int x, int y) { return size_t(y - y0 + r) * size_t(side) + size_t(x - x0 + r); };
+    const int pr = p.patch_radius, pw = p.width + 2 * pr;
+    patch.count = 0;
     for (int ty = -pr; ty <= pr; ++ty)
         for (int tx = -pr; tx <= pr; ++tx) {
-            const int ax = x0 + tx, ay = y0 + ty;
-            if (!region.contains(ax, ay))
+            if (!p.region.contains(x0 + tx, y0 + ty))
                 continue;
-            const float la = p.pilot_l[p.index(ax, ay)], va = p.pilot_v[p.index(ax, ay)];
-            // The points whose patch pixel j + (tx, ty) lies in the region.
-            const int ya = std::max(ylo, region.ybegin - ty);
-            const int yb = std::min(yhi, region.yend - 1 - ty);
-            const int xa = std::max(xlo, region.xbegin - tx);
-            const int xb = std::min(xhi, region.xend - 1 - tx);
-            for (int y = ya; y <= yb; ++y) {
-                const size_t b = p.index(xa + tx, y + ty);
-                const float* __restrict pl = &p.pilot_l[b];
-                const float* __restrict pv = &p.pilot_v[b];
-                float* __restrict d = &fit.distance[at(xa, y)];
-                float* __restrict c = &fit.terms[at(xa, y)];
-                for (int q = 0; q <= xb - xa; ++q) {
-                    const float lb = pl[q], vb = pv[q];
-                    const float diff = la - lb;
-                    // A 1 % difference is always tolerated: the pilot's own bias.
-                    const float floor = 1e-4f * (la * la + lb * lb) + 1e-30f;
-                    d[q] += (diff * diff - (va + std::min(va, vb)))
-                            / (floor + k2 * (va + vb));
-                    c[q] += 1.0f;
-                }
-            }
-        }
-    const size_t i0 = p.index(x0, y0);
-    const float inv_r2 = 1.0f / float(r * r);
-    for (int y = ylo; y <= yhi; ++y)
-        for (int x = xlo; x <= xhi; ++x) {
-            const size_t j = p.index(x, y), k = at(x, y);
-            if (!p.valid[j] || (!p.id.empty() && p.id[j] != p.id[i0]))
-                continue;
-            const float d2 = fit.terms[k] > 0.0f ? fit.distance[k] / fit.terms[k] : 0.0f;
-            const float sp = float((x - x0) * (x - x0) + (y - y0) * (y - y0)) * inv_r2;
-            fit.weight[k] = std::exp(-sp - std::max(0.0f, d2));
+            const size_t i = p.index(x0 + tx, y0 + ty);
+            const size_t pj = (i / size_t(p.width) + size_t(pr)) * size_t(pw)
+                              + i % size_t(p.width) + size_t(pr);
+            patch.shift[patch.count] = ptrdiff_t(ty) * pw + tx;
+            patch.l[patch.count]     = p.pilot_l[pj];
+            patch.v[patch.count]     = p.pilot_v[pj];
+            ++patch.count;
         }
 }
 
-/// Fit the window centred on (x0, y0); false when it has no usable centre.
+/// Solve one window's normal equations over the features it has
+/// (present[0..nf)) in double: ridge, Cholesky, M^-1 as a quadratic form
+/// and beta; false when M is not positive definite.
 bool
-fit_window(const Points& p, const FeatureRegressionOptions& o,
-           const ROI& clip, int x0, int y0, WindowFit& fit)
+solve_window(const WindowSums& s, const int* present, int nf, float ridge,
+             WindowSolution& out)
 {
-    const size_t i0 = p.index(x0, y0);
-    if (!p.valid[i0])
-        return false;
-    const int r = o.radius, nf = p.nfeatures;
-    const float inv_r = 1.0f / float(r);
-    double M[kMaxFeatures][kMaxFeatures] = {}, B[kMaxFeatures][3] = {};
-    fit.x0 = x0, fit.y0 = y0, fit.nf = nf;
-    const int side = 2 * r + 1;
-    window_weights(p, o, clip, x0, y0, fit);
-    for (int c = 0; c < 3; ++c)
-        fit.lo[c] = fit.hi[c] = p.z[3 * i0 + c] * p.scale[3 * i0 + c];
-    for (int y = std::max(y0 - r, clip.ybegin); y <= std::min(y0 + r, clip.yend - 1); ++y)
-        for (int x = std::max(x0 - r, clip.xbegin); x <= std::min(x0 + r, clip.xend - 1); ++x) {
-            const float w = fit.weight[size_t(y - y0 + r) * size_t(side) + size_t(x - x0 + r)];
-            if (!(w > 0.0f))
-                continue;
-            const size_t j = p.index(x, y);
-            double f[kMaxFeatures];
-            features(p, i0, j, x - x0, y - y0, inv_r, f);
-            for (int a = 0; a < nf; ++a) {
-                for (int b = 0; b <= a; ++b)
-                    M[a][b] += w * f[a] * f[b];
-                for (int c = 0; c < 3; ++c)
-                    B[a][c] += w * f[a] * p.z[3 * j + c];
-            }
-            for (int c = 0; c < 3; ++c) {
-                const float l = p.z[3 * j + c] * p.scale[3 * j + c];
-                fit.lo[c] = std::min(fit.lo[c], l);
-                fit.hi[c] = std::max(fit.hi[c], l);
-            }
-        }
+    double M[kWindowFeatures][kWindowFeatures] = {};
+    for (int a = 0; a < nf; ++a)
+        for (int b = 0; b <= a; ++b)
+            M[a][b] = s.m[present[a]][present[b]];
     // Ridge on the non-constant features relative to the window's weight:
     // the features are O(1) where they vary (dx/r, normal differences,
     // relative inverse depth), so a feature that varies by less than
@@ -257,25 +229,24 @@ fit_window(const Points& p, const FeatureRegressionOptions& o,
     // not fitted to the noise, and a constant one (zero column) stays
     // solvable.
     for (int a = 1; a < nf; ++a)
-        M[a][a] += o.ridge * M[0][0];
-    // Cholesky M = L L^T, in place in fit.chol (lower triangle).
-    auto& L = fit.chol;
-    for (int a = 0; a < nf; ++a) {
+        M[a][a] += ridge * M[0][0];
+    // Cholesky M = L L^T (lower triangle).
+    double L[kWindowFeatures][kWindowFeatures] = {};
+    for (int a = 0; a < nf; ++a)
         for (int b = 0; b <= a; ++b) {
-            double s = M[a][b];
+            double t = M[a][b];
             for (int k = 0; k < b; ++k)
-                s -= L[a][k] * L[b][k];
+                t -= L[a][k] * L[b][k];
             if (a == b) {
-                if (!(s > 0.0))
+                if (!(t > 0.0))
                     return false;
-                L[a][a] = std::sqrt(s);
+                L[a][a] = std::sqrt(t);
             } else {
-                L[a][b] = s / L[b][b];
+                L[a][b] = t / L[b][b];
             }
         }
-    }
     // M^-1 = L^-T L^-1, from the lower triangle L^-1.
-    double Li[kMaxFeatures][kMaxFeatures] = {};
+    double Li[kWindowFeatures][kWindowFeatures] = {};
     for (int a = 0; a < nf; ++a) {
         Li[a][a] = 1.0 / L[a][a];
         for (int b = 0; b < a; ++b) {
@@ -285,85 +256,103 @@ fit_window(const Points& p, const FeatureRegressionOptions& o,
             Li[a][b] = t / L[a][a];
         }
     }
+    std::memset(&out.inverse, 0, sizeof(out.inverse));
+    std::memset(&out.beta, 0, sizeof(out.beta));
     for (int a = 0; a < nf; ++a)
         for (int b = 0; b <= a; ++b) {
             double m = 0.0;
             for (int k = a; k < nf; ++k)
                 m += Li[k][a] * Li[k][b];
-            fit.inverse[a][b] = a == b ? m : 2.0 * m;
+            out.inverse[present[a]][present[b]] = float(a == b ? m : 2.0 * m);
         }
     // beta = M^-1 B: forward then backward substitution.
     for (int c = 0; c < 3; ++c) {
-        double t[kMaxFeatures];
+        double t[kWindowFeatures], beta[kWindowFeatures];
         for (int a = 0; a < nf; ++a) {
-            double s = B[a][c];
+            double v = s.b[present[a]][c];
             for (int k = 0; k < a; ++k)
-                s -= L[a][k] * t[k];
-            t[a] = s / L[a][a];
+                v -= L[a][k] * t[k];
+            t[a] = v / L[a][a];
         }
         for (int a = nf - 1; a >= 0; --a) {
-            double s = t[a];
+            double v = t[a];
             for (int k = a + 1; k < nf; ++k)
-                s -= L[k][a] * fit.beta[k][c];
-            fit.beta[a][c] = s / L[a][a];
+                v -= L[k][a] * beta[k];
+            beta[a] = v / L[a][a];
         }
+        for (int a = 0; a < nf; ++a)
+            out.beta[present[a]][c] = float(beta[a]);
     }
+    for (int c = 0; c < 3; ++c)
+        out.lo[c] = s.lo[c], out.hi[c] = s.hi[c];
     return true;
 }
 
 /// The output pixels' sums: s P per channel, s, s h.
 struct Sums {
-    std::vector<double> acc, wsum, hsum;
-    explicit Sums(size_t n) : acc(3 * n, 0.0), wsum(n, 0.0), hsum(n, 0.0) {}
+    std::vector<double> acc[3], wsum, hsum;
+    explicit Sums(size_t n) : wsum(n, 0.0), hsum(n, 0.0)
+    {
+        for (auto& a : acc)
+            a.assign(n, 0.0);
+    }
 };
 
-/// Splat one fitted window onto the output pixels of roi it covers: the
-/// prediction at each point, clamped so that its radiance stays within the
-/// range of radiance the window saw (no light beyond what the render has,
-/// as section 6 does), with the fit's weight; and the
-/// hat diagonal h = w x^T M^-1 x (0 where clamped: the value no longer
-/// moves with z there, up to the point attaining the bound).
+/// Fit the window centred on (x0, y0) and splat it onto the pixels of roi
+/// it covers; nothing when its centre takes no part or its normal matrix
+/// is singular.
 void
-splat_window(const Points& p, const FeatureRegressionOptions& o,
-             const ROI& clip, const ROI& roi, const WindowFit& fit, Sums& s)
+fit_and_splat(const Points& p, const FeaturePlanes& planes,
+              const FeatureRegressionOptions& o, const ROI& roi, int x0,
+              int y0, WindowScratch& scratch, CentrePatch& patch, Sums& s)
 {
-    const int r = o.radius, nf = fit.nf;
-    const float inv_r = 1.0f / float(r);
-    const size_t i0 = p.index(fit.x0, fit.y0);
-    const int ylo = std::max({ fit.y0 - r, clip.ybegin, roi.ybegin });
-    const int yhi = std::min({ fit.y0 + r, clip.yend - 1, roi.yend - 1 });
-    const int xlo = std::max({ fit.x0 - r, clip.xbegin, roi.xbegin });
-    const int xhi = std::min({ fit.x0 + r, clip.xend - 1, roi.xend - 1 });
-    for (int y = ylo; y <= yhi; ++y)
-        for (int x = xlo; x <= xhi; ++x) {
-            const float w = fit.weight[size_t(y - fit.y0 + r) * size_t(2 * r + 1)
-                                       + size_t(x - fit.x0 + r)];
-            if (!(w > 0.0f))
-                continue;
-            const size_t j = p.index(x, y);
-            double f[kMaxFeatures];
-            features(p, i0, j, x - fit.x0, y - fit.y0, inv_r, f);
-            double q = 0.0;  // x^T M^-1 x
-            for (int a = 0; a < nf; ++a)
-                for (int b = 0; b <= a; ++b)
-                    q += fit.inverse[a][b] * f[a] * f[b];
-            const size_t o_ = size_t(y - roi.ybegin) * size_t(roi.width())
-                              + size_t(x - roi.xbegin);
-            double hl = 0.0;
-            for (int c = 0; c < 3; ++c) {
-                double v = 0.0;
-                for (int a = 0; a < nf; ++a)
-                    v += f[a] * fit.beta[a][c];
-                const double a = p.scale[3 * j + c];
-                const double clamped = std::min(std::max(v, fit.lo[c] / a),
-                                                fit.hi[c] / a);
-                if (clamped == v)
-                    hl += detail::kLumaWeights[c] * w * q;
-                s.acc[3 * o_ + c] += w * clamped;
-            }
-            s.wsum[o_] += w;
-            s.hsum[o_] += w * hl;
+    const size_t i0 = p.index(x0, y0);
+    if (!(p.valid[i0] > 0.0f))
+        return;
+    const WindowExtent e = window_extent(p, x0, y0, o.radius, scratch.row_stride);
+    centre_patch(p, x0, y0, patch);
+    window_weights(planes, e, patch, o.patch_k, scratch.weight.data());
+    WindowSums sums;
+    for (int c = 0; c < 3; ++c)
+        sums.lo[c] = sums.hi[c] = p.radiance[c][i0];
+    window_sums(planes, e, scratch.weight.data(), sums);
+    int present[kWindowFeatures] = { 0, 1, 2 }, nf = 3;
+    if (p.has_normal)
+        present[nf++] = 3, present[nf++] = 4, present[nf++] = 5;
+    if (p.has_depth)
+        present[nf++] = 6;
+    WindowSolution fit;
+    if (!solve_window(sums, present, nf, o.ridge, fit))
+        return;
+    float* const splat[kSplatPlanes] = { scratch.splat[0].data(), scratch.splat[1].data(),
+                                         scratch.splat[2].data(), scratch.splat[3].data(),
+                                         scratch.splat[4].data() };
+    window_splat(planes, e, scratch.weight.data(), fit, splat);
+    // Add the points inside roi to its pixels' sums, in window order.
+    const ROI& g = p.region;
+    const int xlo = std::max(e.xlo + g.xbegin, roi.xbegin), xhi = std::min(e.xhi + g.xbegin, roi.xend - 1);
+    const int ylo = std::max(e.ylo + g.ybegin, roi.ybegin), yhi = std::min(e.yhi + g.ybegin, roi.yend - 1);
+    for (int y = ylo; y <= yhi; ++y) {
+        const size_t k = size_t(y - g.ybegin - e.ylo) * size_t(e.row_stride)
+                         + size_t(xlo - g.xbegin - e.xlo);
+        const size_t out = size_t(y - roi.ybegin) * size_t(roi.width())
+                           + size_t(xlo - roi.xbegin);
+        const int n = xhi - xlo + 1;
+        for (int c = 0; c < 3; ++c) {
+            const float* __restrict from = splat[kSplatR + c] + k;
+            double* __restrict to = s.acc[c].data() + out;
+            for (int q = 0; q < n; ++q)
+                to[q] += double(from[q]);
         }
+        const float* __restrict w = splat[kSplatWeight] + k;
+        const float* __restrict h = splat[kSplatHat] + k;
+        double* __restrict ws = s.wsum.data() + out;
+        double* __restrict hs = s.hsum.data() + out;
+        for (int q = 0; q < n; ++q) {
+            ws[q] += double(w[q]);
+            hs[q] += double(h[q]);
+        }
+    }
 }
 
 }  // namespace
@@ -431,9 +420,10 @@ feature_regression(ImageBuf& dst, const ImageBuf& quotient,
         return false;
 
     const Points p = decode_points(quotient, albedo, pilot, guides, region,
-                                   o.albedo_eps);
-    // Windows clip at the frame, whose part held here is the region.
-    const ROI clip = region;
+                                   o.albedo_eps, o.patch_radius);
+    const FeaturePlanes planes = p.planes();
+    // Windows clip at the frame, whose part held here is the region
+    // (window_extent()).
     // Centres: lattice points (anchored at the frame's origin) whose window
     // reaches roi. Lattice rows a multiple of `phases` apart have disjoint
     // windows, so the rows of one phase run in parallel and every pixel
@@ -458,10 +448,10 @@ feature_regression(ImageBuf& dst, const ImageBuf& quotient,
                 rows.push_back(y);
         parallel_for(int64_t(0), int64_t(rows.size()), [&](int64_t k) {
             const int y0 = rows[size_t(k)];
-            WindowFit fit;
+            WindowScratch scratch(r);
+            CentrePatch patch;
             for (int x0 = cx0; x0 <= cx1; x0 += s)
-                if (fit_window(p, o, clip, x0, y0, fit))
-                    splat_window(p, o, clip, roi, fit, sums);
+                fit_and_splat(p, planes, o, roi, x0, y0, scratch, patch, sums);
         }, detail::paropt_any_length(nthreads));
     }
     const size_t nout = roi.npixels();
@@ -472,13 +462,13 @@ feature_regression(ImageBuf& dst, const ImageBuf& quotient,
                               + size_t(x - roi.xbegin);
             const size_t i = p.index(x, y);
             float* d       = &out[4 * o_];
-            if (p.valid[i] && sums.wsum[o_] > 0.0) {
+            if (p.valid[i] > 0.0f && sums.wsum[o_] > 0.0) {
                 for (int c = 0; c < 3; ++c)
-                    d[c] = float(sums.acc[3 * o_ + c] / sums.wsum[o_]);
+                    d[c] = float(sums.acc[c][o_] / sums.wsum[o_]);
                 d[3] = float(sums.hsum[o_] / sums.wsum[o_]);
             } else {
                 for (int c = 0; c < 3; ++c)
-                    d[c] = std::isfinite(p.z[3 * i + c]) ? p.z[3 * i + c] : 0.0f;
+                    d[c] = std::isfinite(p.quotient[3 * i + c]) ? p.quotient[3 * i + c] : 0.0f;
                 d[3] = 1.0f;
             }
         }

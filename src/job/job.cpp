@@ -11,6 +11,7 @@
 
 #include "job.h"
 
+#include <zdenoise/simd.h>
 #include <zdenoise/temporal.h>
 
 #include <algorithm>
@@ -298,6 +299,8 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
                      result.strips, result.strip_rows, cost.around,
                      readable_size(result.estimated_bytes)));
     result.log.push_back("parameters " + describe(j.filter));
+    result.log.push_back("vector kernels " + simd_target() + " (this CPU runs "
+                         + Strutil::join(simd_targets(), ", ") + ")");
 
     for (const std::string& path : files.paths())
         files.rows(path).reserve(
