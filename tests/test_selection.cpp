@@ -169,33 +169,57 @@ mse(const RefImage& a, const RefImage& clean, int x0, int x1)
 }  // namespace
 
 
+namespace {
+
+/// A staircase of w x 26 and its quotient, as images for the library and
+/// for the reference, with the scene's normal, depth and id guides.
+struct GuidedStaircase {
+    synth::Scene s;
+    Quotient q;
+    RefImage n, d, id;
+    ImageBuf zb, pb, ab;
+    explicit GuidedStaircase(int w)
+        : s(synth::staircase(w, 26, 6, { 8, 31 })), q(s),
+          n(zdenoise_ref::from_imagebuf(s.normal)), d(zdenoise_ref::from_imagebuf(s.depth)),
+          id(zdenoise_ref::from_imagebuf(s.object_id)), zb(zdenoise_ref::to_imagebuf(q.z)),
+          pb(zdenoise_ref::to_imagebuf(q.pilot)), ab(zdenoise_ref::to_imagebuf(q.albedo))
+    {
+    }
+    zdenoise_ref::RefGuides ref_guides() const
+    {
+        zdenoise_ref::RefGuides rg;
+        rg.normal = &n, rg.depth = &d, rg.object_id = &id;
+        return rg;
+    }
+    zdenoise::Guides guides() const
+    {
+        zdenoise::Guides g;
+        g.normal = &s.normal, g.depth = &s.depth, g.object_id = &s.object_id;
+        return g;
+    }
+};
+
+}  // namespace
+
 // The library's feature regression is the reference's, with and without
 // guides, with the scene's ids; channel 3 (D) too.
 TEST(FeatureRegression, MatchesTheReference)
 {
-    const synth::Scene s = synth::staircase(30, 26, 6, { 8, 31 });
-    const Quotient q(s);
-    const RefImage n = zdenoise_ref::from_imagebuf(s.normal);
-    const RefImage d = zdenoise_ref::from_imagebuf(s.depth);
-    const RefImage id = zdenoise_ref::from_imagebuf(s.object_id);
-    const ImageBuf zb = zdenoise_ref::to_imagebuf(q.z), pb = zdenoise_ref::to_imagebuf(q.pilot);
-    const ImageBuf ab = zdenoise_ref::to_imagebuf(q.albedo);
+    const GuidedStaircase st(30);
     for (int guided = 0; guided < 2; ++guided)
         for (float k : { 0.5f, 1.0f }) {
             SCOPED_TRACE(std::string(guided ? "guides" : "no guides") + ", patch_k "
                          + std::to_string(k));
             zdenoise::FeatureRegressionOptions o = small_windows();
-            o.patch_k                            = k;
-            zdenoise_ref::RefGuides rg;
-            zdenoise::Guides g;
-            if (guided) {
-                rg.normal = &n, rg.depth = &d, rg.object_id = &id;
-                g.normal = &s.normal, g.depth = &s.depth, g.object_id = &s.object_id;
-            }
+            o.patch_k = k;
+            const zdenoise_ref::RefGuides rg = guided ? st.ref_guides() : zdenoise_ref::RefGuides();
+            const zdenoise::Guides g = guided ? st.guides() : zdenoise::Guides();
             ImageBuf lib;
-            ASSERT_TRUE(zdenoise::feature_regression(lib, zb, ab, pb, g, o)) << lib.geterror();
+            ASSERT_TRUE(zdenoise::feature_regression(lib, st.zb, st.ab, st.pb, g, o))
+                << lib.geterror();
             const RefImage got = zdenoise_ref::from_imagebuf(lib);
-            const RefImage ref = zdenoise_ref::feature_regression(q.z, q.albedo, q.pilot, rg, o);
+            const RefImage ref
+                = zdenoise_ref::feature_regression(st.q.z, st.q.albedo, st.q.pilot, rg, o);
             EXPECT_LT(max_difference(got, ref, 3, 1.0), 1e-4);
             EXPECT_LT(max_difference(got, ref, 4, 1.0), 1e-4) << "hat diagonal";
         }
@@ -206,19 +230,10 @@ TEST(FeatureRegression, MatchesTheReference)
 // result, and the sets agree with each other within float rounding.
 TEST(FeatureRegression, EveryInstructionSetMatchesTheReference)
 {
-    const synth::Scene s = synth::staircase(40, 26, 6, { 8, 31 });
-    const Quotient q(s);
-    const RefImage n = zdenoise_ref::from_imagebuf(s.normal);
-    const RefImage d = zdenoise_ref::from_imagebuf(s.depth);
-    const RefImage id = zdenoise_ref::from_imagebuf(s.object_id);
-    const ImageBuf zb = zdenoise_ref::to_imagebuf(q.z), pb = zdenoise_ref::to_imagebuf(q.pilot);
-    const ImageBuf ab = zdenoise_ref::to_imagebuf(q.albedo);
-    zdenoise_ref::RefGuides rg;
-    rg.normal = &n, rg.depth = &d, rg.object_id = &id;
-    zdenoise::Guides g;
-    g.normal = &s.normal, g.depth = &s.depth, g.object_id = &s.object_id;
+    const GuidedStaircase st(40);
     const zdenoise::FeatureRegressionOptions o = small_windows();
-    const RefImage ref = zdenoise_ref::feature_regression(q.z, q.albedo, q.pilot, rg, o);
+    const RefImage ref
+        = zdenoise_ref::feature_regression(st.q.z, st.q.albedo, st.q.pilot, st.ref_guides(), o);
     const std::vector<std::string> targets = zdenoise::simd_targets();
     ASSERT_FALSE(targets.empty());
     EXPECT_TRUE(targets.back() == "SCALAR" || targets.back() == "EMU128")
@@ -229,7 +244,8 @@ TEST(FeatureRegression, EveryInstructionSetMatchesTheReference)
         ASSERT_TRUE(zdenoise::set_simd_target(t));
         EXPECT_EQ(zdenoise::simd_target(), t);
         ImageBuf lib;
-        ASSERT_TRUE(zdenoise::feature_regression(lib, zb, ab, pb, g, o)) << lib.geterror();
+        ASSERT_TRUE(zdenoise::feature_regression(lib, st.zb, st.ab, st.pb, st.guides(), o))
+            << lib.geterror();
         got.push_back(zdenoise_ref::from_imagebuf(lib));
         EXPECT_LT(max_difference(got.back(), ref, 3, 1.0), 1e-4);
         EXPECT_LT(max_difference(got.back(), ref, 4, 1.0), 1e-4) << "hat diagonal";
