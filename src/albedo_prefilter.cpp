@@ -17,6 +17,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imagebufalgo_util.h>
 
+#include "albedo_prefilter_kernels.h"
 #include "internal.h"
 
 namespace zdenoise {
@@ -29,6 +30,8 @@ namespace {
 constexpr int kSearch = 3;
 /// Half-size of the patches compared (3x3).
 constexpr int kPatch = 1;
+/// exp(-t) of a float is 0 for every t at least this (2^-150 rounds to 0).
+constexpr float kNoWeight = 103.972084f;
 /// Rows a thread filters at a time.
 constexpr int kBandRows = 16;
 /// Keeps 0 / 0 defined where neither pixel has noise (then any difference
@@ -40,6 +43,8 @@ constexpr float kVarianceFloor = 1e-10f;
 struct AlbedoPlanes {
     ROI win;
     std::vector<float> a, v;
+    /// a and v again, a plane a channel, for the row kernels.
+    std::vector<float> planar_a[3], planar_v[3];
 
     size_t index(int x, int y) const
     {
@@ -159,41 +164,20 @@ filter_rows(const AlbedoPlanes& p, const ROI& rows, const ROI& roi,
                 std::fill(dnr, dnr + nw, 0.0f);
                 if (y + oy < p.win.ybegin || y + oy >= p.win.yend)
                     continue;
-                const float* ap = &p.a[3 * p.index(p.win.xbegin, y)];
-                const float* vp = &p.v[3 * p.index(p.win.xbegin, y)];
-                const float* aq = &p.a[3 * p.index(p.win.xbegin, y + oy)];
-                const float* vq = &p.v[3 * p.index(p.win.xbegin, y + oy)];
-                for (int x = xa; x < xb; ++x) {
-                    const int i = 3 * (x - p.win.xbegin);
-                    const int j = 3 * (x + ox - p.win.xbegin);
-                    float sum   = 0.0f;
-                    for (int c = 0; c < 3; ++c) {
-                        const float diff = ap[i + c] - aq[j + c];
-                        const float a = vp[i + c], b = vq[j + c];
-                        sum += (diff * diff - (a + std::min(a, b)))
-                               / (kVarianceFloor + a + b);
-                    }
-                    const bool defined = !std::isnan(sum);
-                    dr[x - near.xbegin]  = defined ? sum / 3.0f : 0.0f;
-                    dnr[x - near.xbegin] = defined ? 1.0f : 0.0f;
-                }
+                if (xb <= xa)
+                    continue;
+                const size_t i = p.index(xa, y), j = p.index(xa + ox, y + oy);
+                const float* ap[3] = { &p.planar_a[0][i], &p.planar_a[1][i], &p.planar_a[2][i] };
+                const float* vp[3] = { &p.planar_v[0][i], &p.planar_v[1][i], &p.planar_v[2][i] };
+                const float* aq[3] = { &p.planar_a[0][j], &p.planar_a[1][j], &p.planar_a[2][j] };
+                const float* vq[3] = { &p.planar_v[0][j], &p.planar_v[1][j], &p.planar_v[2][j] };
+                detail::patch_distance_row(ap, vp, aq, vq, xb - xa, kVarianceFloor,
+                                           &dr[xa - near.xbegin], &dnr[xa - near.xbegin]);
             }
             // Sums over x-1..x+1 within the band's columns.
             for (int y = near.ybegin; y < near.yend; ++y) {
                 const size_t r = near_index(near.xbegin, y);
-                for (int k = 0; k < nw; ++k) {
-                    float s = d[r + size_t(k)], n = dn[r + size_t(k)];
-                    if (k > 0) {
-                        s += d[r + size_t(k) - 1];
-                        n += dn[r + size_t(k) - 1];
-                    }
-                    if (k + 1 < nw) {
-                        s += d[r + size_t(k) + 1];
-                        n += dn[r + size_t(k) + 1];
-                    }
-                    hs[r + size_t(k)] = s;
-                    hn[r + size_t(k)] = n;
-                }
+                detail::box3_row(&d[r], &dn[r], nw, &hs[r], &hn[r]);
             }
             // w(p, q) = exp(-max(0, mean of d over p's 3x3 patch))
             for (int y = rows.ybegin; y < rows.yend; ++y) {
@@ -211,7 +195,13 @@ filter_rows(const AlbedoPlanes& p, const ROI& rows, const ROI& roi,
                         sum += hs[near_index(x, yy)];
                         n += hn[near_index(x, yy)];
                     }
-                    const float w = std::exp(-std::max(sum / n, 0.0f));
+                    // Past kNoWeight expf is 0, reached through libm's
+                    // slow underflow path: skip the call (most offsets
+                    // in texture are that far).
+                    const float t = std::max(sum / n, 0.0f);
+                    if (!(t < kNoWeight))
+                        continue;
+                    const float w = std::exp(-t);
                     const size_t j = 3 * p.index(x + ox, y + oy);
                     for (int c = 0; c < 3; ++c)
                         acc[3 * o + c] += double(w) * double(p.a[j + c]);
@@ -258,6 +248,14 @@ prefilter_albedo(ImageBuf& dst, const ImageBuf& albedo, int samples, ROI roi,
         if (!std::isfinite(a))
             a = std::numeric_limits<float>::quiet_NaN();
     coverage_variance(p, samples, nthreads);
+    for (int c = 0; c < 3; ++c) {
+        p.planar_a[c].resize(p.a.size() / 3);
+        p.planar_v[c].resize(p.a.size() / 3);
+        for (size_t i = 0; i < p.planar_a[c].size(); ++i) {
+            p.planar_a[c][i] = p.a[3 * i + size_t(c)];
+            p.planar_v[c][i] = p.v[3 * i + size_t(c)];
+        }
+    }
     // In bands of rows, each on its own (all its offsets, then the next
     // band), so that a band's planes stay in cache; each pixel adds its
     // offsets in one fixed order, so the result does not depend on the

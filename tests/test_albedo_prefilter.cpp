@@ -16,6 +16,7 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
+#include <zdenoise/simd.h>
 #include <zdenoise/zdenoise.h>
 
 #include "cli_test.h"
@@ -190,6 +191,23 @@ TEST(AlbedoPrefilter, DoesNotDependOnThreadsOrOnComputingAPart)
     ASSERT_FALSE(part.has_error()) << part.geterror();
     EXPECT_TRUE(synth::same_pixels(ImageBufAlgo::crop(part, ROI(0, 96, 20, 40)),
                             ImageBufAlgo::crop(one, ROI(0, 96, 20, 40))));
+}
+
+
+// Its row kernels keep the scalar code's operations and their order (no
+// fused multiply-add), so every instruction set gives the same floats.
+TEST(AlbedoPrefilter, EveryInstructionSetGivesTheSameFloats)
+{
+    RenderedAlbedo r = render_albedo(61, 23, 4, 15, text_at);
+    std::vector<ImageBuf> got;
+    for (const std::string& t : zdenoise::simd_targets()) {
+        SCOPED_TRACE(t);
+        ASSERT_TRUE(zdenoise::set_simd_target(t));
+        got.push_back(zdenoise::prefilter_albedo(r.noisy, 4));
+        ASSERT_FALSE(got.back().has_error()) << got.back().geterror();
+        EXPECT_TRUE(synth::same_pixels(got.back(), got.front()));
+    }
+    ASSERT_TRUE(zdenoise::set_simd_target(""));
 }
 
 

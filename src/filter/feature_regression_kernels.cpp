@@ -25,6 +25,8 @@ namespace hn = hwy::HWY_NAMESPACE;
 
 using D = hn::ScalableTag<float>;
 using V = hn::Vec<D>;
+static_assert(HWY_LANES(float) <= kFeaturePlanePadding,
+              "a vector must fit in the planes' padding");
 using M = hn::Mask<D>;
 using DU = hn::RebindToUnsigned<D>;
 
