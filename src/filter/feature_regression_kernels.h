@@ -71,8 +71,8 @@ struct CentrePatch {
     float l[kMaxOffsets], v[kMaxOffsets];
 };
 
-/// One window's normal equations, summed in float lanes and added up in
-/// double: m[a][b] = sum w x_a x_b (b <= a), b[a][c] = sum w x_a z_c.
+/// One window's normal equations, summed in float lanes whose sum is then
+/// kept in double for the solve: m[a][b] = sum w x_a x_b (b <= a), b[a][c] = sum w x_a z_c.
 struct WindowSums {
     double m[kWindowFeatures][kWindowFeatures];
     double b[kWindowFeatures][3];
