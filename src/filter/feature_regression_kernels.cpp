@@ -61,8 +61,9 @@ load_features(const FeaturePlanes& p, const WindowExtent& e, size_t j, V dx, V d
     return pt;
 }
 
-/// Calls f(j, k, dx, dy, lanes_left) for each vector of the window's rows:
-/// j the plane index of its first point, k its index in the window buffers.
+/// Calls f(j, k, dx, dy, lanes_left, x, y) for each vector of the window's
+/// rows: j the plane index of its first point (x, y), k its index in the
+/// window buffers.
 template <class F>
 HWY_INLINE void
 for_each_vector(const FeaturePlanes& p, const WindowExtent& e, F&& f)
@@ -76,7 +77,7 @@ for_each_vector(const FeaturePlanes& p, const WindowExtent& e, F&& f)
         const V dy = hn::Set(d, float(y - e.y0));
         for (int u = 0; u < n; u += lanes) {
             const V dx = hn::Add(hn::Iota(d, 0.0f), hn::Set(d, float(e.xlo + u - e.x0)));
-            f(row + size_t(e.xlo + u), krow + size_t(u), dx, dy, n - u);
+            f(row + size_t(e.xlo + u), krow + size_t(u), dx, dy, n - u, e.xlo + u, y);
         }
     }
 }
@@ -93,11 +94,10 @@ WindowWeights(const FeaturePlanes& p, const WindowExtent& e,
     const V inv_r2 = hn::Set(d, 1.0f / float(e.radius * e.radius));
     const int pr = (p.pilot_width - p.width) / 2;
     const uint32_t id0 = p.id ? p.id[e.centre] : 0u;
-    for_each_vector(p, e, [&](size_t j, size_t k, V dx, V dy, int left) {
+    for_each_vector(p, e, [&](size_t j, size_t k, V dx, V dy, int left, int x, int y) {
         // The pilot index of the point: the pilot planes have pr more
         // columns on each side and pr more rows above.
-        const size_t y = j / size_t(p.width), x = j % size_t(p.width);
-        const size_t pj = (y + size_t(pr)) * size_t(p.pilot_width) + x + size_t(pr);
+        const size_t pj = size_t(y + pr) * size_t(p.pilot_width) + size_t(x + pr);
         V dist = zero, terms = zero;
         for (int t = 0; t < centre.count; ++t) {
             const size_t at = size_t(ptrdiff_t(pj) + centre.shift[t]);
@@ -140,7 +140,7 @@ sums_rows(const FeaturePlanes& p, const WindowExtent& e, const float* weight,
     for (auto& row : b)
         for (V& v : row)
             v = hn::Zero(d);
-    for_each_vector(p, e, [&](size_t j, size_t k, V dx, V dy, int) {
+    for_each_vector(p, e, [&](size_t j, size_t k, V dx, V dy, int, int, int) {
         const Points pt = load_features(p, e, j, dx, dy);
         const V w = hn::LoadU(d, weight + k);
         V z[3];
@@ -179,7 +179,7 @@ WindowSums_(const FeaturePlanes& p, const WindowExtent& e, const float* weight,
     V lo[3], hi[3];
     for (int c = 0; c < 3; ++c)
         lo[c] = hn::Set(d, s.lo[c]), hi[c] = hn::Set(d, s.hi[c]);
-    for_each_vector(p, e, [&](size_t j, size_t k, V, V, int) {
+    for_each_vector(p, e, [&](size_t j, size_t k, V, V, int, int, int) {
         const M used = hn::Gt(hn::LoadU(d, weight + k), zero);
         for (int c = 0; c < 3; ++c) {
             const V l = hn::LoadU(d, p.radiance[c] + j);
@@ -200,7 +200,7 @@ WindowSplat(const FeaturePlanes& p, const WindowExtent& e, const float* weight,
     constexpr int F = kWindowFeatures;
     const D d;
     const V zero = hn::Zero(d);
-    for_each_vector(p, e, [&](size_t j, size_t k, V dx, V dy, int) {
+    for_each_vector(p, e, [&](size_t j, size_t k, V dx, V dy, int, int, int) {
         const Points pt = load_features(p, e, j, dx, dy);
         // x^T M^-1 x over the lower triangle (off-diagonal entries doubled).
         V q = zero;
