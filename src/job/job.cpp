@@ -6,6 +6,7 @@
 // the layers, the output's layout, the strips), then run_strip() reads,
 // denoises and writes one strip at a time. Each step's work is in a file of
 // its own: role_defaults (what the files' conventions give each role),
+// colour_plan (the colour spaces),
 // input_files (headers, channel selection), layers_plan, memory_plan
 // (strips), strips (a strip's images), output (layout, rows, sinks).
 
@@ -15,13 +16,13 @@
 #include <zdenoise/temporal.h>
 
 #include <algorithm>
-#include <cstdlib>
 
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
 #include "atomic_write.h"
+#include "colour_plan.h"
 #include "diagnostics_picture.h"
 #include "failure.h"
 #include "input_files.h"
@@ -42,32 +43,6 @@ using namespace OIIO;
 using OIIO::Strutil::fmt::format;
 
 namespace {
-
-/// The job's colour spaces, or none when no config is found and the user
-/// asked for nothing (the OIIO plugin outside an installation): then the
-/// pixels are filtered as they are.
-bool
-resolve_colour(const Job& j, InputFiles& files, colour::ColourConfig& config,
-               colour::JobSpaces& spaces, std::vector<std::string>& log)
-{
-    std::string err;
-    // Layers may come without an albedo of the beauty: then the input's.
-    const InputArg& albedo = j.albedo.given ? j.albedo : j.in;
-    if (!j.colour.any_given() && !std::getenv("OCIO")
-        && colour::bundled_config_path().empty()) {
-        log.push_back("no colour config found: pixels filtered as they are");
-        return false;
-    }
-    if (!config.load(j.colour.config, err)
-        || !colour::resolve_job_spaces(config, j.colour,
-                                       *files.header(j.in.path).first,
-                                       *files.header(albedo.path).first,
-                                       albedo.path == j.in.path, spaces,
-                                       log, err))
-        fail(err);
-    return true;
-}
-
 
 /// What -v says of the layers (or of their absence) and of the noise.
 void
