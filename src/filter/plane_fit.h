@@ -8,7 +8,6 @@
 #pragma once
 
 #include "internal.h"
-#include "row_kernels.h"
 
 namespace zdenoise {
 namespace detail {
@@ -20,37 +19,6 @@ struct FitMoments {
     double t[3][3] = {};  ///< per channel: sum w z {1, u, v}
     double n[6] = {};     ///< sum w^2 Vs {1, u, v, uu, uv, vv}
     int count = 0;
-
-    /// Set from a cell's lane sums (in pixel offsets) for radius R (in
-    /// the same pixels: half a fine radius on the pyramid's level 1); also
-    /// returns the cell's sum of w^2 sigma^2. The lanes are added as a
-    /// fixed tree (l + l+4, then + l+2, then + l+1), which vectorises.
-    double set(const CellLanes& c, double R)
-    {
-        using S = CellLanes;
-        static_assert(kLanes == 8, "the tree below adds eight lanes");
-        float half[S::kSums][4], quarter[S::kSums][2];
-        for (int k = 0; k < S::kSums; ++k)
-            for (int l = 0; l < 4; ++l)
-                half[k][l] = c.lane[k][l] + c.lane[k][l + 4];
-        for (int k = 0; k < S::kSums; ++k)
-            for (int l = 0; l < 2; ++l)
-                quarter[k][l] = half[k][l] + half[k][l + 2];
-        double sum[S::kSums];
-        for (int k = 0; k < S::kSums; ++k)
-            sum[k] = double(quarter[k][0] + quarter[k][1]);
-        const double i1 = 1.0 / R, i2 = i1 * i1;
-        const double scale[6] = { 1.0, i1, i1, i2, i2, i2 };
-        for (int k = 0; k < 6; ++k) {
-            s[k] = sum[S::W + k] * scale[k];
-            n[k] = sum[S::N + k] * scale[k];
-        }
-        for (int ch = 0; ch < 3; ++ch)
-            for (int k = 0; k < 3; ++k)
-                t[ch][k] = sum[S::Z0 + 3 * ch + k] * scale[k];
-        count = int(sum[S::Count]);
-        return sum[S::S2];
-    }
 
     FitMoments& operator+=(const FitMoments& o)
     {

@@ -44,73 +44,6 @@ exp_neg(float t)
 
 }  // namespace
 
-/// Add the points of one row segment to a cell, kLanes at a time; store
-/// each point's value factor exp(-vt) in `values` (whole blocks: the
-/// buffers are padded, and a store past the segment lands where a later
-/// segment writes or nobody reads).
-ZDENOISE_ROW_KERNEL void
-fit_row(const float* __restrict fit_weight, const float* __restrict spatial,
-        const float* __restrict zl, const float* __restrict z0,
-        const float* __restrict z1, const float* __restrict z2,
-        const float* __restrict l0, const float* __restrict l1,
-        const float* __restrict l2, const float* __restrict vs,
-        const float* __restrict sigma, float* __restrict values,
-        CellLanes* __restrict cell, RangeLanes* __restrict range,
-        const FitRow& in)
-{
-    using S = CellLanes;
-    const float dy = in.dy, ey = in.ey, mean = in.mean;
-    const float value_scale = in.value_scale;
-    const int n = in.n;
-    for (int j = 0; j < n; j += kLanes) {
-        for (int l = 0; l < kLanes; ++l) {
-            // Every load unconditional, selects instead of branches: the
-            // lanes vectorise.
-            const int q       = j + l;
-            const float fw    = fit_weight[q];
-            const float sp    = spatial[q];
-            const float vsq   = vs[q];
-            const float sgq   = sigma[q];
-            const float value = exp_neg(value_scale * std::fabs(zl[q] - mean));
-            values[q]         = value;
-            const bool use    = q < n && fw > 0.0f;
-            const float w   = use ? fw * sp * ey * value : 0.0f;
-            const float w2v = w * w * (use ? vsq : 0.0f);
-            const float sg  = use ? sgq : 0.0f;
-            const float dx  = in.dx0 + float(q);
-            const float wx = w * dx, wy = w * dy;
-            S& c = *cell;
-            c.lane[S::W][l] += w;
-            c.lane[S::Wx][l] += wx;
-            c.lane[S::Wy][l] += wy;
-            c.lane[S::Wxx][l] += wx * dx;
-            c.lane[S::Wxy][l] += wx * dy;
-            c.lane[S::Wyy][l] += wy * dy;
-            const float zc[3] = { z0[q], z1[q], z2[q] };
-            const float lc[3] = { l0[q], l1[q], l2[q] };
-#pragma GCC unroll 3
-            for (int ch = 0; ch < 3; ++ch) {
-                c.lane[S::Z0 + 3 * ch][l] += w * zc[ch];
-                c.lane[S::Z0x + 3 * ch][l] += wx * zc[ch];
-                c.lane[S::Z0y + 3 * ch][l] += wy * zc[ch];
-                float& llo = range->llo[ch][l];
-                float& lhi = range->lhi[ch][l];
-                llo = use && lc[ch] < llo ? lc[ch] : llo;
-                lhi = use && lc[ch] > lhi ? lc[ch] : lhi;
-            }
-            const float nx = w2v * dx, ny = w2v * dy;
-            c.lane[S::N][l] += w2v;
-            c.lane[S::Nx][l] += nx;
-            c.lane[S::Ny][l] += ny;
-            c.lane[S::Nxx][l] += nx * dx;
-            c.lane[S::Nxy][l] += nx * dy;
-            c.lane[S::Nyy][l] += ny * dy;
-            c.lane[S::S2][l] += w * w * sg * sg;
-            c.lane[S::Count][l] += use ? 1.0f : 0.0f;
-        }
-    }
-}
-
 ZDENOISE_ROW_KERNEL void
 value_row(const float* __restrict fit_weight, const float* __restrict zl,
           const float* __restrict l0, const float* __restrict l1,
@@ -134,167 +67,6 @@ value_row(const float* __restrict fit_weight, const float* __restrict zl,
     }
 }
 
-namespace {
-
-/// The splat weights and values of section 7 for one segment; kPower8 when
-/// quadrant_power is 8 (the default: r^8 by multiplication vectorises,
-/// std::pow does not).
-// The pointers of a SplatRow again, as __restrict parameters: GCC gives up
-// vectorising when it must check at run time that more than ten of them do
-// not overlap, and only parameters carry restrict reliably.
-#define ZDENOISE_SPLAT_POINTERS                                               \
-    const uint32_t *__restrict cls, const float *__restrict gw,                \
-        const float *__restrict fitw, const float *__restrict values,          \
-        const float *__restrict spat, const float *__restrict zl,              \
-        const float *__restrict ia0, const float *__restrict ia1,              \
-        const float *__restrict ia2, float *__restrict out_s,                  \
-        float *__restrict a0, float *__restrict a1, float *__restrict a2,      \
-        float *__restrict h, float *__restrict hc, float *__restrict hca
-#define ZDENOISE_SPLAT_ARGS(in)                                                \
-    in.cls, in.g, in.fit_weight, in.values, in.spatial, in.zl,                 \
-        in.inv_albedo[0], in.inv_albedo[1], in.inv_albedo[2], in.s, in.a[0],   \
-        in.a[1], in.a[2], in.hat[0], in.hat[1], in.hat[2]
-
-template<bool kPower8, bool kHat>
-[[gnu::always_inline]] inline void
-splat_lanes(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
-{
-    float* const out_a[3] = { a0, a1, a2 };
-    const float* const inv_albedo[3] = { ia0, ia1, ia2 };
-    const PlaneCoeffs P = in.whole, Q = in.quadrant;
-    const WindowRange range = in.range;
-    const float ey = in.ey, inv_r = in.inv_r, v = in.v, dx0 = in.dx0;
-    const float mean = in.mean, value_scale = in.value_scale;
-    const int n = in.n;
-    // Whole blocks of kLanes points (the inputs and outputs are padded):
-    // segments are short, and a plain loop would spend most of its time in
-    // its scalar remainder. No sums across points, so any vector width
-    // computes every point alike.
-    for (int j = 0; j < n; j += kLanes) {
-        for (int l = 0; l < kLanes; ++l) {
-            const int q       = j + l;
-            const uint32_t cl = cls[q];
-            const float g    = gw[q];
-            const float fw   = fitw[q];
-            const float kept = values[q];
-            const float sp   = spat[q];
-            // Receiving implies a surface (section 2). One bit test per
-            // condition: GCC 12 vectorises no bitwise and of two of them.
-            const bool use = (cl & kReceiveAny) && g > 0.0f;
-            const bool fit = (cl & kFitPoint) != 0;
-            const float fresh = exp_neg(value_scale * std::fabs(zl[q] - mean));
-            const float value = fit ? (fw > 0.0f ? kept : fresh) : 1.0f;
-            const float s = use ? g * sp * ey * value : 0.0f;
-            const float u = (dx0 + float(q)) * inv_r;
-            // The hat diagonal's terms: the point's own fit weight times
-            // e^T M^-1 e of the whole and the quadrant plane.
-            float h_whole = 0.0f, h_quadrant = 0.0f, H_l = 0.0f, A_l = 0.0f;
-            if (kHat) {
-                const float w = use ? fw * sp * ey * value : 0.0f;
-                auto form = [u, v](const float* k) {
-                    return k[0] + u * (k[1] + k[3] * u + k[4] * v)
-                           + v * (k[2] + k[5] * v);
-                };
-                h_whole    = w * form(P.hat);
-                h_quadrant = w * form(Q.hat);
-            }
-#pragma GCC unroll 3
-            for (int ch = 0; ch < 3; ++ch) {
-                const float Z  = P.c[ch] + P.a[ch] * u + P.b[ch] * v;
-                const float Zm = Q.c[ch] + Q.a[ch] * u + Q.b[ch] * v;
-                // r = max(a/b, b/a) with one division
-                const float a = std::fabs(Z) + float(kEps);
-                const float b = std::fabs(Zm) + float(kEps);
-                const float r = std::max(a, b) / std::min(a, b);
-                float wm;
-                if (kPower8) {
-                    const float r2 = r * r, r4 = r2 * r2;
-                    wm = r4 * r4;
-                } else {
-                    wm = std::pow(r, power);
-                }
-                wm = std::min(wm, float(kMaxWm));
-                const bool opposite = (Z < 0.0f && Zm > 0.0f)
-                                      || (Z > 0.0f && Zm < 0.0f);
-                wm = opposite ? float(kMaxWm) : wm;
-                // Without a quadrant plane Q is the whole one: Zm = Z, wm = 1
-                // and A = (Z + Z) / 2 = Z exactly.
-                // Within the radiance the window saw, at this pixel's
-                // albedo: a plane extrapolates, and a mixed pixel's z (an
-                // emitter's anti-aliased edge) is no one side's light.
-                const float A  = (Z + wm * Zm) / (1.0f + wm);
-                const float ia = inv_albedo[ch][q];
-                const float Al = std::min(std::max(A, range.llo[ch] * ia),
-                                          range.lhi[ch] * ia);
-                out_a[ch][q] = s * Al;
-                if (kHat) {
-                    // The blend's weight follows the point too: w_m = r^p
-                    // with ln r = |ln a - ln b|, so dw_m = p w_m d ln r
-                    // (none where w_m is at its bound), and
-                    // dA = (h + w_m h_m + (Zm - Z) dw_m / (1 + w_m)) / (1 + w_m).
-                    // A clamped channel does not follow its own value.
-                    const float da  = (Z < 0.0f ? -h_whole : h_whole) / a;
-                    const float db  = (Zm < 0.0f ? -h_quadrant : h_quadrant) / b;
-                    const float dln = a >= b ? da - db : db - da;
-                    const float dwm = wm < float(kMaxWm)
-                                          ? (kPower8 ? 8.0f : power) * wm * dln
-                                          : 0.0f;
-                    const float H = (h_whole + wm * h_quadrant
-                                     + (Zm - Z) * dwm / (1.0f + wm))
-                                    / (1.0f + wm);
-                    H_l += kLumaWeights[ch] * (Al == A ? H : 0.0f);
-                    A_l += kLumaWeights[ch] * Al;
-                }
-            }
-            out_s[q] = s;
-            if (kHat) {
-                // d ln(weight) / d zl of a fit point's value term (where
-                // exp_neg does not clamp it).
-                const float t = value_scale * std::fabs(zl[q] - mean);
-                const float c = fit && t < kValueClamp
-                                    ? (zl[q] > mean   ? value_scale
-                                       : zl[q] < mean ? -value_scale
-                                                      : 0.0f)
-                                    : 0.0f;
-                h[q]   = s * H_l * (1.0f - c * (zl[q] - A_l));
-                hc[q]  = s * c;
-                hca[q] = s * c * A_l;
-            }
-        }
-    }
-}
-
-#define ZDENOISE_SPLAT_NAMES                                                   \
-    cls, gw, fitw, values, spat, zl, ia0, ia1, ia2, out_s, a0, a1, a2, h, hc, hca
-
-ZDENOISE_ROW_KERNEL void
-splat_row_power8(ZDENOISE_SPLAT_POINTERS, const SplatRow& in)
-{
-    splat_lanes<true, false>(ZDENOISE_SPLAT_NAMES, in, 8.0f);
-}
-
-void
-splat_row(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
-{
-    splat_lanes<false, false>(ZDENOISE_SPLAT_NAMES, in, power);
-}
-
-// With the hat diagonal (selection's risk only): not the default's cost.
-ZDENOISE_ROW_KERNEL void
-splat_row_power8_hat(ZDENOISE_SPLAT_POINTERS, const SplatRow& in)
-{
-    splat_lanes<true, true>(ZDENOISE_SPLAT_NAMES, in, 8.0f);
-}
-
-void
-splat_row_hat(ZDENOISE_SPLAT_POINTERS, const SplatRow& in, float power)
-{
-    splat_lanes<false, true>(ZDENOISE_SPLAT_NAMES, in, power);
-}
-#undef ZDENOISE_SPLAT_NAMES
-
-}  // namespace
-
 void
 RangeLanes::clear()
 {
@@ -306,6 +78,15 @@ RangeLanes::clear()
 }
 
 
+WindowRange
+WindowRange::empty()
+{
+    RangeLanes lanes;
+    lanes.clear();
+    return WindowRange(lanes);
+}
+
+
 WindowRange::WindowRange(const RangeLanes& r)
 {
     for (int ch = 0; ch < 3; ++ch) {
@@ -313,24 +94,6 @@ WindowRange::WindowRange(const RangeLanes& r)
         lhi[ch] = *std::max_element(r.lhi[ch], r.lhi[ch] + kLanes);
     }
 }
-
-
-/// The splat of one row segment, by the kernel that fits quadrant_power.
-void
-splat_row(const SplatRow& in, float power)
-{
-    if (in.hat[0]) {
-        if (power == 8.0f)
-            splat_row_power8_hat(ZDENOISE_SPLAT_ARGS(in), in);
-        else
-            splat_row_hat(ZDENOISE_SPLAT_ARGS(in), in, power);
-    } else if (power == 8.0f)
-        splat_row_power8(ZDENOISE_SPLAT_ARGS(in), in);
-    else
-        splat_row(ZDENOISE_SPLAT_ARGS(in), in, power);
-}
-#undef ZDENOISE_SPLAT_POINTERS
-#undef ZDENOISE_SPLAT_ARGS
 
 
 namespace {

@@ -39,19 +39,27 @@ WindowFitter::grow_to(int R)
         // Locals: the sums must not go through memory at every point.
         double zsum = m_zsum;
         int zcount  = m_zcount;
+        WindowRange range = m_range;
         float* fit_weight = &m_fit_weight[c];
+        // Selects, not branches: whether a point is good is data.
+        constexpr float inf = std::numeric_limits<float>::infinity();
         for (int q = 0; q < n; ++q) {
             const size_t iq = i + size_t(q);
-            float fw        = 0.0f;
-            if (g[q] > 0.0f && (m_in.cls[iq] & kFitPoint)) {
-                zsum += m_in.zl[iq];
-                ++zcount;
-                fw = g[q] * m_in.fit_prior[iq];
-            }
+            const bool take = g[q] > 0.0f && (m_in.cls[iq] & kFitPoint);
+            zsum += take ? double(m_in.zl[iq]) : 0.0;
+            zcount += take;
+            const float fw = take ? g[q] * m_in.fit_prior[iq] : 0.0f;
             fit_weight[q] = fw;
+            const bool good = fw > 0.0f;
+            for (int ch = 0; ch < 3; ++ch) {
+                const float l = m_in.lfit[ch][iq];
+                range.llo[ch] = std::min(range.llo[ch], good ? l : inf);
+                range.lhi[ch] = std::max(range.lhi[ch], good ? l : -inf);
+            }
         }
         m_zsum   = zsum;
         m_zcount = zcount;
+        m_range  = range;
     };
     for (int y = ya; y <= yb; ++y) {
         if (std::abs(y - m_y0) > m_grown) {
@@ -71,66 +79,60 @@ WindowFitter::fit(int R, int value_buffer)
     WindowFit wf;
     wf.radius = R;
     wf.values = value_buffer;
-    float* values = m_value[value_buffer].data();
     wf.mean   = float(m_zsum / m_zcount);
+    // grow_to(R) has just run: its range is this window's.
+    wf.range = m_range;
     set_spatial(R);
     const ROI win = window_in_image(R);
-    const int ya = win.ybegin, yb = win.yend - 1;
-    const int xa = win.xbegin, xb = win.xend - 1;
-
+    FitColumns cols;
+    cols.stride       = size_t(m_in.width);
+    cols.cache_stride = size_t(m_side);
+    cols.spatial      = &m_spatial_row[size_t(win.xbegin - m_x0 + R)];
+    cols.columns      = win.width();
+    cols.mean         = wf.mean;
+    cols.value_scale  = value_scale(wf.mean);
+    cols.sums         = m_column_sums.data();
+    cols.sums_stride  = column_sums_stride();
     // Nine disjoint cells, each point added once: open quadrants 0-3,
-    // half-axes 4 (+y), 5 (-x), 6 (-y), 7 (+x), and the centre 8. The closed
-    // quadrants and the whole window are sums of cells.
-    CellLanes* cells = m_cells.data();
-    std::memset(static_cast<void*>(cells), 0, 9 * sizeof(CellLanes));
-    RangeLanes range;
-    range.clear();
-    FitRow row;
-    row.mean        = wf.mean;
-    row.value_scale = value_scale(wf.mean);
-    for (int y = ya; y <= yb; ++y) {
-        const int dy = y - m_y0;
-        row.dy       = float(dy);
-        row.ey       = m_spatial_row[size_t(dy + R)];
-        const int segments[3][3] = {
-            { xa, m_x0 - 1, dy > 0 ? 1 : (dy < 0 ? 2 : 5) },
-            { m_x0, m_x0, dy > 0 ? 4 : (dy < 0 ? 6 : 8) },
-            { m_x0 + 1, xb, dy > 0 ? 0 : (dy < 0 ? 3 : 7) },
-        };
-        for (const auto& seg : segments) {
-            if (seg[1] < seg[0])
-                continue;
-            const size_t i = m_in.index(seg[0], y);
-            const size_t c = cache_index(seg[0] - m_x0, dy);
-            row.n          = seg[1] - seg[0] + 1;
-            row.dx0        = float(seg[0] - m_x0);
-            fit_row(&m_fit_weight[c], &m_spatial_row[size_t(seg[0] - m_x0 + R)],
-                    &m_in.zl[i], &m_in.zfit[0][i], &m_in.zfit[1][i],
-                    &m_in.zfit[2][i], &m_in.lfit[0][i], &m_in.lfit[1][i],
-                    &m_in.lfit[2][i], &m_in.vs[i], &m_in.sigma[i], values + c,
-                    &cells[seg[2]], &range, row);
-        }
+    // half-axes 4 (+y), 5 (-x), 6 (-y), 7 (+x), and the centre 8, by the
+    // sides of the centre's row and column (left, centre, right) each
+    // group of rows spans.
+    static const int kCellOfSide[3][3] = { { 2, 6, 3 }, { 5, 8, 7 }, { 1, 4, 0 } };
+    const int groups[3][2] = { { win.ybegin, m_y0 - 1 }, { m_y0, m_y0 },
+                               { m_y0 + 1, win.yend - 1 } };
+    FitMoments cells[9];
+    double w2s2 = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        const int ya = std::max(groups[k][0], win.ybegin);
+        const int yb = std::min(groups[k][1], win.yend - 1);
+        if (yb < ya)
+            continue;
+        const size_t i = m_in.index(win.xbegin, ya);
+        const size_t c = cache_index(win.xbegin - m_x0, ya - m_y0);
+        set_plane_pointers(cols, m_in, i);
+        cols.fit_weight = &m_fit_weight[c];
+        cols.values     = m_value[value_buffer].data() + c;
+        cols.ey         = &m_spatial_row[size_t(ya - m_y0 + R)];
+        cols.rows       = yb - ya + 1;
+        cols.dy0        = float(ya - m_y0);
+        fit_columns(cols);
+        w2s2 += add_columns(cols.sums, cols.sums_stride, cols.columns,
+                            float(win.xbegin - m_x0), double(R), kCellOfSide[k], cells);
     }
-    wf.range = WindowRange(range);
-    solve_cells(wf, R);
+    solve_cells(wf, cells, w2s2);
     return wf;
 }
 
 
 void
-WindowFitter::solve_cells(WindowFit& wf, double R)
+WindowFitter::solve_cells(WindowFit& wf, const FitMoments cell[9], double w2s2)
 {
-    const CellLanes* cells = m_cells.data();
-    FitMoments cell[9];
-    double w2s2 = 0.0;
-    for (int k = 0; k < 9; ++k)
-        w2s2 += cell[k].set(cells[k], R);
     static const int kQuadrantCells[4][4] = {
         { 0, 4, 7, 8 }, { 1, 4, 5, 8 }, { 2, 5, 6, 8 }, { 3, 6, 7, 8 }
     };
     FitMoments whole;
-    for (const FitMoments& m : cell)
-        whole += m;
+    for (int k = 0; k < 9; ++k)
+        whole += cell[k];
     wf.whole = solve(whole);
     for (int q = 0; q < 4; ++q) {
         FitMoments quad;
@@ -201,39 +203,42 @@ WindowFitter::fit_on_pyramid(int R, int value_buffer)
     };
     for (int q = 0; q < n; ++q)
         m_coarse_spatial[size_t(q)] = spatial(float(bxa + q) - bx0);
-    CellLanes* cells = m_cells.data();
-    std::memset(static_cast<void*>(cells), 0, 9 * sizeof(CellLanes));
-    RangeLanes range;  // not kept: the splat takes the fine points' range
-    range.clear();
-    FitRow row;
-    row.mean        = wf.mean;
-    row.value_scale = value_scale(wf.mean);
-    // No block lies on the centre's axes: each row splits into a left and
-    // a right open quadrant (cells 1, 0 above the centre, 2, 3 below).
-    const int left_end = block_of(x0 - 1);  // the last block left of x0
-    for (int by = bya; by <= byb; ++by) {
-        const size_t k = size_t(by - bya) * size_t(n);
-        row.dy         = float(by) - by0;
-        row.ey         = spatial(row.dy);
-        const bool up  = row.dy > 0.0f;
-        const int segments[2][3] = { { bxa, std::min(left_end, bxb), up ? 1 : 2 },
-                                     { std::max(left_end + 1, bxa), bxb,
-                                       up ? 0 : 3 } };
-        for (const auto& seg : segments) {
-            if (seg[1] < seg[0])
-                continue;
-            const size_t i  = c.index(seg[0], by);
-            const size_t kq = k + size_t(seg[0] - bxa);
-            row.n           = seg[1] - seg[0] + 1;
-            row.dx0         = float(seg[0]) - bx0;
-            fit_row(&m_coarse_fit_weight[kq],
-                    &m_coarse_spatial[size_t(seg[0] - bxa)], &c.zl[i],
-                    &c.zfit[0][i], &c.zfit[1][i], &c.zfit[2][i], &c.lfit[0][i],
-                    &c.lfit[1][i], &c.lfit[2][i], &c.vs[i], &c.sigma[i],
-                    &m_coarse_values[kq], &cells[seg[2]], &range, row);
-        }
+    // No block lies on the centre's row or column: the blocks above the
+    // centre (dy > 0) are cells 1 (left) and 0, those below 2 and 3.
+    static const int kCellOfSide[2][3] = { { 2, 8, 3 }, { 1, 8, 0 } };
+    FitColumns cols;
+    cols.stride       = size_t(c.width);
+    cols.cache_stride = size_t(n);
+    cols.spatial      = m_coarse_spatial.data();
+    cols.columns      = n;
+    cols.mean         = wf.mean;
+    cols.value_scale  = value_scale(wf.mean);
+    cols.sums         = m_column_sums.data();
+    cols.sums_stride  = column_sums_stride();
+    for (int by = bya; by <= byb; ++by)
+        m_coarse_ey[size_t(by - bya)] = spatial(float(by) - by0);
+    // The first row above the centre.
+    int above = bya;
+    while (above <= byb && !(float(above) - by0 > 0.0f))
+        ++above;
+    FitMoments cells[9];
+    double w2s2 = 0.0;
+    const int groups[2][2] = { { bya, above - 1 }, { above, byb } };
+    for (int k = 0; k < 2; ++k) {
+        if (groups[k][1] < groups[k][0])
+            continue;
+        const size_t kq = size_t(groups[k][0] - bya) * size_t(n);
+        set_plane_pointers(cols, c, c.index(bxa, groups[k][0]));
+        cols.fit_weight = &m_coarse_fit_weight[kq];
+        cols.values     = &m_coarse_values[kq];
+        cols.ey         = &m_coarse_ey[size_t(groups[k][0] - bya)];
+        cols.rows       = groups[k][1] - groups[k][0] + 1;
+        cols.dy0        = float(groups[k][0]) - by0;
+        fit_columns(cols);
+        w2s2 += add_columns(cols.sums, cols.sums_stride, n, float(bxa) - bx0,
+                            0.5 * double(R), kCellOfSide[k], cells);
     }
-    solve_cells(wf, 0.5 * double(R));
+    solve_cells(wf, cells, w2s2);
     return wf;
 }
 
@@ -299,10 +304,10 @@ WindowFitter::splat(const WindowFit& w, StopReason reason)
     for (int q = 0; q < 4; ++q)
         quadrant[q] = w.quadrant[q].present ? coeffs(w.quadrant[q]) : whole;
     SplatRow row;
-    row.values      = m_value[w.values].data();
     row.inv_r       = 1.0f / float(R);
     row.mean        = w.mean;
     row.value_scale = value_scale(w.mean);
+    row.power       = m_opt.quadrant_power;
     row.whole       = whole;
     row.range       = w.range;
     row.s           = m_splat_s.data();
@@ -310,7 +315,7 @@ WindowFitter::splat(const WindowFit& w, StopReason reason)
         row.a[ch]   = m_splat_a[ch].data();
         row.hat[ch] = m_hat ? m_splat_hat[ch].data() : nullptr;
     }
-    const float* values = row.values;
+    const float* values = m_value[w.values].data();
     // Only output pixels receive.
     const int ya = std::max(m_y0 - R, m_out.ybegin);
     const int yb = std::min(m_y0 + R, m_out.yend - 1);
@@ -321,46 +326,40 @@ WindowFitter::splat(const WindowFit& w, StopReason reason)
         const int dy = y - m_y0;
         row.v        = float(dy) * row.inv_r;
         row.ey       = m_spatial_row[size_t(dy + R)];
-        // The row's two halves, each in one quadrant (dx < 0, dx >= 0).
-        const int halves[2][3] = { { xa, std::min(xb, m_x0 - 1), dy >= 0 ? 1 : 2 },
-                                   { std::max(xa, m_x0), xb, dy >= 0 ? 0 : 3 } };
-        for (const auto& half : halves) {
-            const int x0 = half[0], x1 = half[1];
-            if (x1 < x0)
+        // Left of the centre (dx < 0) quadrant 1 or 2, else 0 or 3.
+        row.left  = quadrant[dy >= 0 ? 1 : 2];
+        row.right = quadrant[dy >= 0 ? 0 : 3];
+        const size_t i = m_in.index(xa, y);
+        const size_t c = cache_index(xa - m_x0, dy);
+        row.cls        = &m_in.cls[i];
+        row.g          = &m_g[c];
+        row.spatial    = &m_spatial_row[size_t(xa - m_x0 + R)];
+        row.fit_weight = &m_fit_weight[c];
+        row.values     = values + c;
+        row.zl         = &m_in.zl[i];
+        for (int ch = 0; ch < 3; ++ch)
+            row.inv_albedo[ch] = &m_in.inv_albedo[ch][i];
+        row.n   = xb - xa + 1;
+        row.dx0 = float(xa - m_x0);
+        splat_row(row);
+        const size_t first = size_t(y - m_out.ybegin) * out_w + size_t(xa - m_out.xbegin);
+        size_t o = first;
+        for (int q = 0; q < row.n; ++q, ++o) {
+            const float sw = m_splat_s[size_t(q)];
+            if (!(sw > 0.0f))
                 continue;
-            const size_t i = m_in.index(x0, y);
-            const size_t c = cache_index(x0 - m_x0, dy);
-            row.cls          = &m_in.cls[i];
-            row.g            = &m_g[c];
-            row.spatial      = &m_spatial_row[size_t(x0 - m_x0 + R)];
-            row.fit_weight   = &m_fit_weight[c];
-            row.values       = values + c;
-            row.zl           = &m_in.zl[i];
+            double* acc = &m_acc[3 * o];
             for (int ch = 0; ch < 3; ++ch)
-                row.inv_albedo[ch] = &m_in.inv_albedo[ch][i];
-            row.n            = x1 - x0 + 1;
-            row.dx0          = float(x0 - m_x0);
-            row.quadrant     = quadrant[half[2]];
-            splat_row(row, m_opt.quadrant_power);
-            size_t o = size_t(y - m_out.ybegin) * out_w
-                       + size_t(x0 - m_out.xbegin);
-            for (int q = 0; q < row.n; ++q, ++o) {
-                const float sw = m_splat_s[size_t(q)];
-                if (!(sw > 0.0f))
-                    continue;
-                double* acc = &m_acc[3 * o];
-                for (int ch = 0; ch < 3; ++ch)
-                    acc[ch] += double(m_splat_a[ch][size_t(q)]);
-                m_wsum[o] += double(sw);
-                if (m_hat) {
-                    double* h = &(*m_hat)[kHatSums * o];
-                    for (int t = 0; t < kHatSums; ++t)
-                        h[t] += double(m_splat_hat[t][size_t(q)]);
-                }
+                acc[ch] += double(m_splat_a[ch][size_t(q)]);
+            m_wsum[o] += double(sw);
+            if (m_hat) {
+                double* h = &(*m_hat)[kHatSums * o];
+                for (int t = 0; t < kHatSums; ++t)
+                    h[t] += double(m_splat_hat[t][size_t(q)]);
             }
-            if (m_diagnostics)
-                add_diagnostics(w, reason, o - size_t(row.n), row.n);
         }
+        if (m_diagnostics)
+            add_diagnostics(w, reason, first, row.n);
     }
 }
 
@@ -392,6 +391,7 @@ WindowFitter::process(int x0, int y0, int& radius, bool splat_window)
     m_grown = -1;
     m_zsum  = 0.0;
     m_zcount = 0;
+    m_range  = WindowRange::empty();
     m_guide.centre(x0, y0);
 
     WindowFit previous, current;

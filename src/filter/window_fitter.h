@@ -11,10 +11,12 @@
 #include <vector>
 
 #include "filter_inputs.h"
+#include "fit_kernel.h"
 #include "guide_weight.h"
 #include "plane_fit.h"
 #include "pyramid_level.h"
 #include "row_kernels.h"
+#include "splat_kernel.h"
 
 namespace zdenoise {
 namespace detail {
@@ -77,23 +79,24 @@ public:
         , m_fit_weight(cache_size(), 0.0f)
         , m_value { std::vector<float>(cache_size(), 0.0f),
                     std::vector<float>(cache_size(), 0.0f) }
-        , m_spatial_row(size_t(m_side) + kLanes, 0.0f)
-        , m_cells(9)
-        , m_splat_s(size_t(m_side) + kLanes, 0.0f)
-        , m_splat_a { std::vector<float>(size_t(m_side) + kLanes, 0.0f),
-                      std::vector<float>(size_t(m_side) + kLanes, 0.0f),
-                      std::vector<float>(size_t(m_side) + kLanes, 0.0f) }
+        , m_spatial_row(size_t(m_side) + kPlanePadding, 0.0f)
+        , m_column_sums(kColumnSums * column_sums_stride(), 0.0f)
+        , m_splat_s(size_t(m_side) + kPlanePadding, 0.0f)
+        , m_splat_a { std::vector<float>(size_t(m_side) + kPlanePadding, 0.0f),
+                      std::vector<float>(size_t(m_side) + kPlanePadding, 0.0f),
+                      std::vector<float>(size_t(m_side) + kPlanePadding, 0.0f) }
     {
         if (m_hat)
             for (std::vector<float>& h : m_splat_hat)
-                h.assign(size_t(m_side) + kLanes, 0.0f);
+                h.assign(size_t(m_side) + kPlanePadding, 0.0f);
         if (m_pyramid) {
             // Level 1 holds at most r_max + 1 blocks of a window's side.
             const size_t side = size_t(opt.r_max) + 1;
-            m_coarse_g.assign(side * side + kLanes, 0.0f);
-            m_coarse_fit_weight.assign(side * side + kLanes, 0.0f);
-            m_coarse_values.assign(side * side + kLanes, 0.0f);
-            m_coarse_spatial.assign(side + kLanes, 0.0f);
+            m_coarse_g.assign(side * side + kPlanePadding, 0.0f);
+            m_coarse_fit_weight.assign(side * side + kPlanePadding, 0.0f);
+            m_coarse_values.assign(side * side + kPlanePadding, 0.0f);
+            m_coarse_spatial.assign(side + kPlanePadding, 0.0f);
+            m_coarse_ey.assign(side, 0.0f);
         }
     }
 
@@ -111,9 +114,9 @@ public:
     }
 
 private:
-    /// The caches hold the largest window and kLanes of padding (the row
-    /// kernels read whole blocks of lanes).
-    size_t cache_size() const { return size_t(m_side) * m_side + kLanes; }
+    /// The caches hold the largest window and kPlanePadding floats of
+    /// padding (the kernels read whole vectors).
+    size_t cache_size() const { return size_t(m_side) * m_side + kPlanePadding; }
     size_t cache_index(int dx, int dy) const
     {
         return size_t(dy + m_opt.r_max) * m_side + (dx + m_opt.r_max);
@@ -149,9 +152,20 @@ private:
     /// splat fills m_value[values]. Absent (whole.present false) where the
     /// window holds no block that is a fit point.
     [[gnu::noinline]] WindowFit fit_on_pyramid(int R, int values);
-    /// The planes of a fit from its nine cells' lane sums, in window
-    /// coordinates of radius R (in the cells' pixels).
-    void solve_cells(WindowFit& wf, double R);
+    /// The planes of a fit from its nine cells' moments and its sum of
+    /// w^2 sigma^2.
+    void solve_cells(WindowFit& wf, const FitMoments cells[9], double w2s2);
+    /// Floats between the column sums' planes: a window's side and padding.
+    size_t column_sums_stride() const { return size_t(m_side) + kPlanePadding; }
+    /// Point the fit kernel's planes at pixel index i of `in`.
+    static void set_plane_pointers(FitColumns& cols, const FilterInputs& in, size_t i)
+    {
+        cols.zl = &in.zl[i];
+        for (int ch = 0; ch < 3; ++ch)
+            cols.z[ch] = &in.zfit[ch][i];
+        cols.vs    = &in.vs[i];
+        cols.sigma = &in.sigma[i];
+    }
     /// What a fit on the pyramid leaves to the splat: the guide and fit
     /// weights, value factors and radiance range at full resolution.
     [[gnu::noinline]] void prepare_pyramid_splat(WindowFit& w);
@@ -177,7 +191,7 @@ private:
     /// Level 1's guide and fit weights over a window, its value factors
     /// (not kept) and e(dx) of its columns.
     std::vector<float> m_coarse_g, m_coarse_fit_weight, m_coarse_values,
-        m_coarse_spatial;
+        m_coarse_spatial, m_coarse_ey;
     int m_side;
     std::vector<float> m_g;  ///< g(q; p0) over the grown window
     /// g(q; p0) exp(-sigma(q)) for good fit points, 0 for the others: the
@@ -188,13 +202,15 @@ private:
     std::vector<float> m_value[2];
     /// exp(-d^2/R^2) at d + R, d = -R..R (and kLanes of padding)
     std::vector<float> m_spatial_row;
-    /// The lane sums of the nine cells of a fit.
-    std::vector<CellLanes> m_cells;
-    /// The splat kernel's output for one row segment (and kLanes padding).
+    /// The fit kernel's column sums for one group of rows.
+    std::vector<float> m_column_sums;
+    /// The splat kernel's output for one row (and kPlanePadding floats).
     std::vector<float> m_splat_s, m_splat_a[3], m_splat_hat[3];
     int m_x0 = 0, m_y0 = 0, m_grown = -1;
     double m_zsum = 0.0;  ///< sum of zl over fit points with g > 0
     int m_zcount  = 0;
+    /// The radiance range of the grown window's good points (fit weight > 0).
+    WindowRange m_range;
 };
 
 }  // namespace detail
