@@ -56,7 +56,8 @@ prepare_fit_planes(FilterInputs& in, const std::vector<float>& z,
     in.vs.resize(npix + kPlanePadding, 0.0f);
     in.sigma.resize(npix + kPlanePadding, 0.0f);
     in.cls.resize(npix + kPlanePadding, 0);
-    in.zeros.assign(3 * (size_t(in.width) + kPlanePadding), 0.0f);
+    if (!in.invdepth.empty())
+        in.invdepth.resize(npix + kPlanePadding, 0.0f);
 }
 
 }  // namespace

@@ -54,7 +54,7 @@ same_id(float a, float b)
 
 /// A decoded normal is all zero where the pixel has none.
 inline bool
-no_normal(const float* n)
+no_normal(const float (&n)[3])
 {
     return n[0] == 0.0f && n[1] == 0.0f && n[2] == 0.0f;
 }
@@ -112,15 +112,18 @@ struct FilterInputs {
     /// The outliers split off z (section 3a), in raster order.
     std::vector<Outlier> outliers;
 
-    // Guides (empty when not given).
-    std::vector<float> normal;    ///< unit normal, 3 per pixel; 0 = none
+    // Guides (empty when not given), planar with kPlanePadding zeros after
+    // the last pixel, as the guide kernel reads them (guide_kernel.h).
+    /// The unit normal, one plane per component; all zero where a pixel
+    /// has none.
+    std::vector<float> normal[3];
     std::vector<float> invdepth;  ///< 1/depth on surface pixels
     int id_pairs = 0;             ///< 0: no id, -1: plain id, k: k pairs
-    std::vector<float> ids;       ///< plain: 1/pixel; pairs: 2k/pixel
-                                  ///< (id, normalised coverage)
-    /// Zeros for three floats a pixel of a row and padding: what the guide
-    /// kernel reads for a guide that is not given.
-    std::vector<float> zeros;
+    /// Object id planes: one for a plain id; for k pairs, plane 2a the id
+    /// of rank a (float bits) and plane 2a + 1 its normalised coverage.
+    std::vector<std::vector<float>> ids;
+
+    bool has_normal() const { return !normal[0].empty(); }
 
     size_t index(int x, int y) const
     {

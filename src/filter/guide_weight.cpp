@@ -2,15 +2,16 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
 // The guide weight of docs/FILTER.md section 4: decoding the normal and id
-// guides, and g(q; p0) for a centre and a row of pixels (the row loops
-// themselves are row kernels, row_kernels.cpp).
+// guides, and g(q; p0) for a centre and a row of pixels (the row loop
+// itself is the guide kernel, guide_kernel.cpp).
 
 #include "guide_weight.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
-#include "row_kernels.h"
+#include "guide_kernel.h"
 
 namespace zdenoise {
 namespace detail {
@@ -19,14 +20,16 @@ void
 decode_normals(FilterInputs& in, const ImageBuf& guide)
 {
     const size_t npix = in.region.npixels();
-    in.normal = read_channels(guide, in.region, 0, 3);
+    const std::vector<float> xyz = read_channels(guide, in.region, 0, 3);
+    for (std::vector<float>& plane : in.normal)
+        plane.assign(npix + kPlanePadding, 0.0f);
     for (size_t i = 0; i < npix; ++i) {
-        float* n = &in.normal[3 * i];
-        float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        const float* n  = &xyz[3 * i];
+        const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
         if (!(len >= 1e-6f) || !std::isfinite(len))
-            n[0] = n[1] = n[2] = 0.0f;
-        else
-            n[0] /= len, n[1] /= len, n[2] /= len;
+            continue;
+        for (int c = 0; c < 3; ++c)
+            in.normal[c][i] = n[c] / len;
     }
 }
 
@@ -43,21 +46,25 @@ decode_object_ids(FilterInputs& in, ImageBuf& dst, const ImageBuf& guide)
                      "regression_filter", nch);
         return false;
     }
-    in.ids      = read_channels(guide, in.region, 0, nch);
+    const std::vector<float> px = read_channels(guide, in.region, 0, nch);
     in.id_pairs = nch == 1 ? -1 : nch / 2;
-    if (in.id_pairs > 0) {
-        const int k = in.id_pairs;
-        for (size_t i = 0; i < npix; ++i) {
-            float* p  = &in.ids[size_t(2 * k) * i];
-            float sum = 0.0f;
-            for (int j = 0; j < k; ++j) {
-                float& c = p[2 * j + 1];
-                if (!(c > 0.0f) || !std::isfinite(c))
-                    c = 0.0f;
-                sum += c;
-            }
-            for (int j = 0; j < k; ++j)
-                p[2 * j + 1] = sum > 0.0f ? p[2 * j + 1] / sum : 0.0f;
+    in.ids.assign(size_t(nch), std::vector<float>(npix + kPlanePadding, 0.0f));
+    for (size_t i = 0; i < npix; ++i) {
+        const float* p = &px[size_t(nch) * i];
+        if (in.id_pairs < 0) {
+            in.ids[0][i] = p[0];
+            continue;
+        }
+        float sum = 0.0f;
+        for (int j = 0; j < in.id_pairs; ++j) {
+            const float c = p[2 * j + 1];
+            sum += c > 0.0f && std::isfinite(c) ? c : 0.0f;
+        }
+        for (int j = 0; j < in.id_pairs; ++j) {
+            const float c = p[2 * j + 1];
+            in.ids[size_t(2 * j)][i] = p[2 * j];
+            in.ids[size_t(2 * j + 1)][i]
+                = sum > 0.0f && c > 0.0f && std::isfinite(c) ? c / sum : 0.0f;
         }
     }
     return true;
@@ -70,11 +77,12 @@ GuideWeight::centre(int x0, int y0)
     m_x0 = float(x0);
     m_y0 = float(y0);
     const size_t i0 = m_in.index(x0, y0);
-    m_n0   = m_in.normal.empty() ? nullptr : &m_in.normal[3 * i0];
-    m_ids0 = m_in.id_pairs > 0 ? &m_in.ids[size_t(2 * m_in.id_pairs) * i0]
-                               : nullptr;
+    for (int c = 0; c < 3; ++c)
+        m_n0[c] = m_in.has_normal() ? m_in.normal[c][i0] : 0.0f;
+    for (size_t k = 0; k < m_pairs0.size(); ++k)
+        m_pairs0[k] = m_in.ids[k][i0];
     if (m_in.id_pairs == -1)
-        m_id0 = m_in.ids[i0];
+        m_id0 = m_in.ids[0][i0];
     if (m_in.invdepth.empty())
         return;
     m_zeta0 = m_in.invdepth[i0];
@@ -109,8 +117,8 @@ GuideWeight::centre_as(const GuideWeight& fine, float x0, float y0,
 {
     m_x0    = x0;
     m_y0    = y0;
-    m_n0    = fine.m_n0;
-    m_ids0  = fine.m_ids0;
+    std::copy(fine.m_n0, fine.m_n0 + 3, m_n0);
+    m_pairs0 = fine.m_pairs0;
     m_id0   = fine.m_id0;
     m_zeta0 = fine.m_zeta0;
     m_gx    = fine.m_gx * scale;
@@ -122,39 +130,30 @@ void
 GuideWeight::row(int x, int y, int n, float* g) const
 {
     const size_t i = m_in.index(x, y);
-    GuideCentre c;
-    const bool normals = !m_in.normal.empty();
-    for (int k = 0; k < 3; ++k)
-        c.n0[k] = normals ? m_n0[k] : 0.0f;
-    c.zeta0           = m_zeta0;
-    c.gx              = m_gx;
-    c.gy              = m_gy;
-    c.depth_tolerance = m_depth_tol;
-    c.normal_cut      = m_cut;
-    std::memcpy(&c.id0, &m_id0, sizeof c.id0);
-    c.dx0 = float(x) - m_x0;
-    c.dy  = float(y) - m_y0;
-    // Absent guides read the zero plane: no normal anywhere gives d = 1.
-    const float* zeros = m_in.zeros.data();
-    const bool depth   = !m_in.invdepth.empty();
-    const bool plain   = m_in.id_pairs == -1;
-    guide_row(&m_in.cls[i], normals ? &m_in.normal[3 * i] : zeros,
-              depth ? &m_in.invdepth[i] : zeros, plain ? &m_in.ids[i] : zeros,
-              g, n, c, depth, plain);
-    if (m_power == 4.0f) {
-        for (int q = 0; q < n; ++q) {
-            const float d2 = g[q] * g[q];
-            g[q]           = d2 * d2;
-        }
-    } else {
-        for (int q = 0; q < n; ++q)
-            if (g[q] > 0.0f)
-                g[q] = std::pow(g[q], m_power);
-    }
-    if (m_in.id_pairs > 0)
-        coverage_row(&m_in.ids[size_t(2 * m_in.id_pairs) * i],
-                     m_ids0, g, n,
-                     m_in.id_pairs);
+    GuideRow r;
+    r.cls = &m_in.cls[i];
+    if (m_in.has_normal())
+        for (int c = 0; c < 3; ++c)
+            r.normal[c] = &m_in.normal[c][i];
+    if (!m_in.invdepth.empty())
+        r.invdepth = &m_in.invdepth[i];
+    r.ids      = m_in.ids.data();
+    r.first    = i;
+    r.id_pairs = m_in.id_pairs;
+    r.n        = n;
+    std::copy(m_n0, m_n0 + 3, r.n0);
+    r.zeta0           = m_zeta0;
+    r.gx              = m_gx;
+    r.gy              = m_gy;
+    r.depth_tolerance = m_depth_tol;
+    r.normal_cut      = m_cut;
+    std::memcpy(&r.id0, &m_id0, sizeof r.id0);
+    r.pairs0 = m_pairs0.data();
+    r.dx0    = float(x) - m_x0;
+    r.dy     = float(y) - m_y0;
+    r.normal_power = m_power;
+    r.g            = g;
+    guide_row(r);
 }
 
 }  // namespace detail

@@ -6,6 +6,8 @@
 
 #pragma once
 
+#include <vector>
+
 #include "filter_inputs.h"
 
 namespace zdenoise {
@@ -31,6 +33,7 @@ public:
         , m_cut(opt.normal_cut)
         , m_power(opt.normal_power)
         , m_depth_tol(opt.depth_tolerance)
+        , m_pairs0(size_t(2 * std::max(in.id_pairs, 0)), 0.0f)
     {
     }
 
@@ -59,8 +62,8 @@ private:
     const FilterInputs& m_in;
     float m_cut, m_power, m_depth_tol;
     float m_x0 = 0, m_y0 = 0;  ///< the centre, in this level's pixels
-    const float* m_n0   = nullptr;  ///< its normal (null: no normal guide)
-    const float* m_ids0 = nullptr;  ///< its (id, coverage) pairs
+    float m_n0[3] = {};        ///< its normal (0: none or no normal guide)
+    std::vector<float> m_pairs0;  ///< its (id, coverage) pairs
     float m_zeta0 = 0, m_gx = 0, m_gy = 0;
     float m_id0 = 0;  ///< the centre's plain id
 };

@@ -98,9 +98,9 @@ median(float* v, int n)
 bool
 same_surface(const FilterInputs& in, size_t a, size_t b)
 {
-    if (!in.normal.empty()) {
-        const float* na = &in.normal[3 * a];
-        const float* nb = &in.normal[3 * b];
+    if (in.has_normal()) {
+        const float na[3] = { in.normal[0][a], in.normal[1][a], in.normal[2][a] };
+        const float nb[3] = { in.normal[0][b], in.normal[1][b], in.normal[2][b] };
         const bool za = no_normal(na), zb = no_normal(nb);
         if (za != zb)
             return false;
@@ -108,17 +108,16 @@ same_surface(const FilterInputs& in, size_t a, size_t b)
             return false;
     }
     if (in.id_pairs == -1)
-        return same_id(in.ids[a], in.ids[b]);
+        return same_id(in.ids[0][a], in.ids[0][b]);
     if (in.id_pairs > 0) {
         // Primary id: the rank of largest coverage (the first of equals).
         auto primary = [&](size_t i, float& id) {
-            const float* p = &in.ids[size_t(2 * in.id_pairs) * i];
-            float best     = 0.0f;
-            bool any       = false;
-            for (int k = 0; k < in.id_pairs; ++k)
-                if (p[2 * k + 1] > best) {
-                    best = p[2 * k + 1];
-                    id   = p[2 * k];
+            float best = 0.0f;
+            bool any   = false;
+            for (size_t k = 0; k < size_t(in.id_pairs); ++k)
+                if (in.ids[2 * k + 1][i] > best) {
+                    best = in.ids[2 * k + 1][i];
+                    id   = in.ids[2 * k][i];
                     any  = true;
                 }
             return any;

@@ -17,14 +17,10 @@ namespace {
 bool
 same_ids(const FilterInputs& fine, const size_t (&px)[4])
 {
-    if (fine.id_pairs == 0)
-        return true;
-    const size_t k = fine.id_pairs == -1 ? 1 : size_t(2 * fine.id_pairs);
-    for (int j = 1; j < 4; ++j)
-        if (std::memcmp(&fine.ids[k * px[0]], &fine.ids[k * px[j]],
-                        k * sizeof(float))
-            != 0)
-            return false;
+    for (const std::vector<float>& plane : fine.ids)
+        for (int j = 1; j < 4; ++j)
+            if (std::memcmp(&plane[px[0]], &plane[px[j]], sizeof(float)) != 0)
+                return false;
     return true;
 }
 
@@ -36,7 +32,7 @@ mean_normal(const FilterInputs& fine, const size_t (&px)[4], float (&n)[3])
 {
     for (size_t i : px)
         for (int c = 0; c < 3; ++c)
-            n[c] += fine.normal[3 * i + size_t(c)];
+            n[c] += fine.normal[c][i];
     const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     for (int c = 0; c < 3; ++c)
         n[c] = len >= 1e-6f ? n[c] / len : 0.0f;
@@ -67,16 +63,13 @@ build_pyramid_level(PyramidLevel& level, const FilterInputs& fine,
         in.zfit[c].assign(npix, 0.0f);
         in.lfit[c].assign(npix, 0.0f);
     }
-    if (!fine.normal.empty())
-        in.normal.assign(3 * npix, 0.0f);
+    if (fine.has_normal())
+        for (std::vector<float>& plane : in.normal)
+            plane.assign(npix, 0.0f);
     if (!fine.invdepth.empty())
         in.invdepth.assign(npix, 0.0f);
     in.id_pairs = fine.id_pairs;
-    const size_t id_floats = fine.id_pairs == 0    ? 0
-                             : fine.id_pairs == -1 ? 1
-                                                   : size_t(2 * fine.id_pairs);
-    in.ids.assign(id_floats * npix, 0.0f);
-    in.zeros.assign(3 * (size_t(in.width) + kPlanePadding), 0.0f);
+    in.ids.assign(fine.ids.size(), std::vector<float>(npix, 0.0f));
     level.zl_sum.assign(npix, 0.0f);
     level.fit_points.assign(npix, 0.0f);
 
@@ -107,7 +100,7 @@ build_pyramid_level(PyramidLevel& level, const FilterInputs& fine,
                     continue;
             }
             float normal[3] = {};
-            if (!fine.normal.empty())
+            if (fine.has_normal())
                 mean_normal(fine, px, normal);
             double P = 0.0, P2v = 0.0, P2s = 0.0, zl = 0.0, zsum = 0.0;
             double z[3] = {}, l[3] = {};
@@ -131,13 +124,11 @@ build_pyramid_level(PyramidLevel& level, const FilterInputs& fine,
             in.cls[b]      = kSurface;
             if (!in.invdepth.empty())
                 in.invdepth[b] = zeta;
-            if (!in.normal.empty())
+            if (in.has_normal())
                 for (int c = 0; c < 3; ++c)
-                    in.normal[3 * b + size_t(c)] = normal[c];
-            if (id_floats)
-                std::memcpy(&in.ids[id_floats * b],
-                            &fine.ids[id_floats * px[0]],
-                            id_floats * sizeof(float));
+                    in.normal[c][b] = normal[c];
+            for (size_t k = 0; k < in.ids.size(); ++k)
+                in.ids[k][b] = fine.ids[k][px[0]];
             level.zl_sum[b]     = float(zsum);
             level.fit_points[b] = float(points);
             if (!(P > 0.0))

@@ -192,6 +192,50 @@ SplatRowImpl(const SplatRow& in)
         in.power == 8.0f ? splat_lanes<true, false>(in) : splat_lanes<false, false>(in);
 }
 
+void
+AccumulateRowImpl(const SplatRow& in, int n, double* HWY_RESTRICT acc,
+                  double* HWY_RESTRICT wsum, double* HWY_RESTRICT hat_sums)
+{
+    // As many floats as a vector holds doubles: each is promoted exactly.
+    const hn::ScalableTag<double> dd;
+    const hn::Rebind<float, decltype(dd)> df;
+    using VD = hn::Vec<decltype(dd)>;
+    const int lanes = int(hn::Lanes(dd));
+    const VD zero = hn::Zero(dd);
+    int q = 0;
+    // Whole vectors only: the sums past the row are other pixels', which
+    // another window may be adding to.
+    for (; q + lanes <= n; q += lanes) {
+        const VD s = hn::PromoteTo(dd, hn::LoadU(df, in.s + q));
+        const auto take = hn::Gt(s, zero);
+        // Adding 0 where a pixel does not receive leaves its sums as they
+        // were (skipping it would too).
+        auto add3 = [&](float* const src[3], double* sums) {
+            VD a0, a1, a2;
+            hn::LoadInterleaved3(dd, sums + 3 * q, a0, a1, a2);
+            a0 = hn::Add(a0, hn::IfThenElseZero(take, hn::PromoteTo(dd, hn::LoadU(df, src[0] + q))));
+            a1 = hn::Add(a1, hn::IfThenElseZero(take, hn::PromoteTo(dd, hn::LoadU(df, src[1] + q))));
+            a2 = hn::Add(a2, hn::IfThenElseZero(take, hn::PromoteTo(dd, hn::LoadU(df, src[2] + q))));
+            hn::StoreInterleaved3(a0, a1, a2, dd, sums + 3 * q);
+        };
+        add3(in.a, acc);
+        hn::StoreU(hn::Add(hn::LoadU(dd, wsum + q), hn::IfThenElseZero(take, s)), dd, wsum + q);
+        if (hat_sums)
+            add3(in.hat, hat_sums);
+    }
+    for (; q < n; ++q) {
+        const float s = in.s[q];
+        if (!(s > 0.0f))
+            continue;
+        for (int ch = 0; ch < 3; ++ch)
+            acc[3 * q + ch] += double(in.a[ch][q]);
+        wsum[q] += double(s);
+        if (hat_sums)
+            for (int t = 0; t < 3; ++t)
+                hat_sums[3 * q + t] += double(in.hat[t][q]);
+    }
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace detail
 }  // namespace zdenoise
@@ -202,11 +246,19 @@ namespace zdenoise {
 namespace detail {
 
 HWY_EXPORT(SplatRowImpl);
+HWY_EXPORT(AccumulateRowImpl);
 
 void
 splat_row(const SplatRow& row)
 {
     HWY_DYNAMIC_DISPATCH(SplatRowImpl)(row);
+}
+
+void
+accumulate_row(const SplatRow& row, int n, double* acc, double* wsum,
+               double* hat_sums)
+{
+    HWY_DYNAMIC_DISPATCH(AccumulateRowImpl)(row, n, acc, wsum, hat_sums);
 }
 
 }  // namespace detail

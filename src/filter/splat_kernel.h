@@ -52,5 +52,13 @@ struct SplatRow {
 void
 splat_row(const SplatRow& row);
 
+/// Add a splat_row()'s output for n pixels to the output's sums (double,
+/// interleaved as the splat's accumulators hold them): acc (3 a pixel) +=
+/// a, wsum += s, and when hat is set hat_sums (kHatSums a pixel) += hat,
+/// at the pixels with s > 0 only.
+void
+accumulate_row(const SplatRow& row, int n, double* acc, double* wsum,
+               double* hat_sums);
+
 }  // namespace detail
 }  // namespace zdenoise

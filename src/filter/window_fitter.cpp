@@ -24,42 +24,18 @@ WindowFitter::grow_to(int R)
     const int ya   = std::max(m_y0 - R, img.ybegin);
     const int yb   = std::min(m_y0 + R, img.yend - 1);
     // The square of radius R less the square already grown, a row segment
-    // or two at a time, clipped to the image.
+    // or two at a time, clipped to the image: their guide weights row by
+    // row, then what the window keeps of them in one call.
+    m_segments.clear();
     auto add = [&](int y, int xa, int xb) {
         xa = std::max(xa, img.xbegin);
         xb = std::min(xb, img.xend - 1);
         if (xb < xa)
             return;
-        const int dy   = y - m_y0;
-        const size_t i = m_in.index(xa, y);
-        const size_t c = cache_index(xa - m_x0, dy);
-        const int n    = xb - xa + 1;
-        float* g       = &m_g[c];
-        m_guide.row(xa, y, n, g);
-        // Locals: the sums must not go through memory at every point.
-        double zsum = m_zsum;
-        int zcount  = m_zcount;
-        WindowRange range = m_range;
-        float* fit_weight = &m_fit_weight[c];
-        // Selects, not branches: whether a point is good is data.
-        constexpr float inf = std::numeric_limits<float>::infinity();
-        for (int q = 0; q < n; ++q) {
-            const size_t iq = i + size_t(q);
-            const bool take = g[q] > 0.0f && (m_in.cls[iq] & kFitPoint);
-            zsum += take ? double(m_in.zl[iq]) : 0.0;
-            zcount += take;
-            const float fw = take ? g[q] * m_in.fit_prior[iq] : 0.0f;
-            fit_weight[q] = fw;
-            const bool good = fw > 0.0f;
-            for (int ch = 0; ch < 3; ++ch) {
-                const float l = m_in.lfit[ch][iq];
-                range.llo[ch] = std::min(range.llo[ch], good ? l : inf);
-                range.lhi[ch] = std::max(range.lhi[ch], good ? l : -inf);
-            }
-        }
-        m_zsum   = zsum;
-        m_zcount = zcount;
-        m_range  = range;
+        const GrowSegment seg { m_in.index(xa, y), cache_index(xa - m_x0, y - m_y0),
+                                xb - xa + 1 };
+        m_guide.row(xa, y, seg.n, &m_g[seg.cache]);
+        m_segments.push_back(seg);
     };
     for (int y = ya; y <= yb; ++y) {
         if (std::abs(y - m_y0) > m_grown) {
@@ -69,6 +45,23 @@ WindowFitter::grow_to(int R)
             add(y, m_x0 + m_grown + 1, m_x0 + R);
         }
     }
+    GrowRing ring;
+    ring.cls       = m_in.cls.data();
+    ring.zl        = m_in.zl.data();
+    ring.fit_prior = m_in.fit_prior.data();
+    for (int ch = 0; ch < 3; ++ch)
+        ring.lfit[ch] = m_in.lfit[ch].data();
+    ring.g          = m_g.data();
+    ring.fit_weight = m_fit_weight.data();
+    ring.segments   = m_segments.data();
+    ring.count      = int(m_segments.size());
+    ring.zsum       = m_zsum;
+    ring.zcount     = m_zcount;
+    ring.range      = m_range;
+    grow_ring(ring);
+    m_zsum   = ring.zsum;
+    m_zcount = ring.zcount;
+    m_range  = ring.range;
     m_grown = R;
 }
 
@@ -343,21 +336,9 @@ WindowFitter::splat(const WindowFit& w, StopReason reason)
         row.dx0 = float(xa - m_x0);
         splat_row(row);
         const size_t first = size_t(y - m_out.ybegin) * out_w + size_t(xa - m_out.xbegin);
-        size_t o = first;
-        for (int q = 0; q < row.n; ++q, ++o) {
-            const float sw = m_splat_s[size_t(q)];
-            if (!(sw > 0.0f))
-                continue;
-            double* acc = &m_acc[3 * o];
-            for (int ch = 0; ch < 3; ++ch)
-                acc[ch] += double(m_splat_a[ch][size_t(q)]);
-            m_wsum[o] += double(sw);
-            if (m_hat) {
-                double* h = &(*m_hat)[kHatSums * o];
-                for (int t = 0; t < kHatSums; ++t)
-                    h[t] += double(m_splat_hat[t][size_t(q)]);
-            }
-        }
+        static_assert(kHatSums == 3, "accumulate_row adds three hat terms");
+        accumulate_row(row, row.n, &m_acc[3 * first], &m_wsum[first],
+                       m_hat ? &(*m_hat)[kHatSums * first] : nullptr);
         if (m_diagnostics)
             add_diagnostics(w, reason, first, row.n);
     }

@@ -12,6 +12,7 @@
 
 #include "filter_inputs.h"
 #include "fit_kernel.h"
+#include "guide_kernel.h"
 #include "guide_weight.h"
 #include "plane_fit.h"
 #include "pyramid_level.h"
@@ -86,6 +87,7 @@ public:
                       std::vector<float>(size_t(m_side) + kPlanePadding, 0.0f),
                       std::vector<float>(size_t(m_side) + kPlanePadding, 0.0f) }
     {
+        m_segments.reserve(2 * size_t(m_side));
         if (m_hat)
             for (std::vector<float>& h : m_splat_hat)
                 h.assign(size_t(m_side) + kPlanePadding, 0.0f);
@@ -211,6 +213,8 @@ private:
     int m_zcount  = 0;
     /// The radiance range of the grown window's good points (fit weight > 0).
     WindowRange m_range;
+    /// The row segments of the last growth (at most two a row).
+    std::vector<GrowSegment> m_segments;
 };
 
 }  // namespace detail
