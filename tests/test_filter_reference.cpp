@@ -375,6 +375,17 @@ TEST(FilterReference, EveryInstructionSetMatchesTheReference)
         k.name += ", pyramid 4";
         k.opt.pyramid_radius = 4;
         run_case(k);
+        // The guide kernel's Cryptomatte overlap, and the powers' other
+        // code paths (libm pow for the normal, exp(p log r) for the blend).
+        Case c{ "cryptomatte", synth::two_objects_cryptomatte(W, H, { 8, 20 }) };
+        c.id = true;
+        run_case(c);
+        Case p{ "staircase, normal power 2, quadrant power 3",
+                synth::staircase(W, H, 5, { 16, 44 }) };
+        p.normal = p.depth       = true;
+        p.opt.normal_power   = 2.0f;
+        p.opt.quadrant_power = 3.0f;
+        run_case(p);
         // Today's filter with its hat diagonal (the selection's candidate 0).
         zdenoise::FilterOptions opt;
         opt.select = 0;
