@@ -665,7 +665,8 @@ Filter::stop_tests(Window& W, const std::vector<Pt>& good) const
 // Section 5.1: the same fit on the blocks of 2x2 pixels (anchored at pixel
 // 0) that lie wholly in the window and the image, are surface, share their
 // id and have a planar inverse depth, each standing for its good fit
-// points with their weights summed; the range stays the fine points'.
+// points with their weights summed; the range stays the fine points' (the
+// blocks' where the window has no fine good point).
 Filter::Window
 Filter::window_on_pyramid(int x0, int y0, int R) const
 {
@@ -677,7 +678,7 @@ Filter::window_on_pyramid(int x0, int y0, int R) const
     const double gx = g.depth ? zeta_gradient(x0, y0, 1, 0) : 0.0;
     const double gy = g.depth ? zeta_gradient(x0, y0, 0, 1) : 0.0;
     struct Block {
-        double dx, dy, g, P = 0.0, zl = 0.0, z[3] = {}, vs = 0.0, s2 = 0.0;
+        double dx, dy, g, P = 0.0, zl = 0.0, z[3] = {}, l[3] = {}, vs = 0.0, s2 = 0.0;
     };
     std::vector<Block> blocks;
     double zsum = 0.0;
@@ -757,8 +758,11 @@ Filter::window_on_pyramid(int x0, int y0, int R) const
                 const double pw = std::exp(-sg);
                 b.P += pw;
                 b.zl += pw * zl(p[0], p[1]);
-                for (int c = 0; c < 3; ++c)
+                for (int c = 0; c < 3; ++c) {
                     b.z[c] += pw * z.at(p[0], p[1], c);
+                    b.l[c] += pw * z.at(p[0], p[1], c)
+                              * (double(La.at(p[0], p[1], c)) + double(opt.albedo_eps));
+                }
                 b.vs += pw * pw * Vs(p[0], p[1]);
                 b.s2 += pw * pw * sg * sg;
             }
@@ -803,11 +807,21 @@ Filter::window_on_pyramid(int x0, int y0, int R) const
         }
         W.quad[m] = fit(q);
     }
-    // The range of the fine good points, as the exact window has it.
+    // The range of the fine good points, as the exact window has it; where
+    // the window has none (a block's mean normal can pass the centre's test
+    // where none of its pixels does), the range of the blocks' radiance.
     const Window fine = window(x0, y0, R);
+    const bool fine_points = fine.llo[0] <= fine.lhi[0];
     for (int c = 0; c < 3; ++c) {
         W.llo[c] = fine.llo[c];
         W.lhi[c] = fine.lhi[c];
+        if (fine_points)
+            continue;
+        W.llo[c] = INF, W.lhi[c] = -INF;
+        for (const Block& b : blocks) {
+            W.llo[c] = std::min(W.llo[c], b.l[c] / b.P);
+            W.lhi[c] = std::max(W.lhi[c], b.l[c] / b.P);
+        }
     }
     stop_tests(W, good);
     return W;

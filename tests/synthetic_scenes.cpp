@@ -263,6 +263,34 @@ fine_texture(int w, int h, Noise noise)
 }
 
 Scene
+corrugated_patch(int w, int h, Noise noise)
+{
+    Builder b(w, h);
+    const float lean = std::sqrt(1.0f - 0.4f * 0.4f);
+    auto in_patch = [&](int x, int y) {
+        return x >= w / 2 - 4 && x < w / 2 + 4 && y >= h / 2 - 4 && y < h / 2 + 4;
+    };
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            b.set_albedo(x, y, 0.5f, 0.5f, 0.5f);
+            if (in_patch(x, y))
+                b.set_normal(x, y, 0.0f, 0.0f, 1.0f);
+            else
+                b.set_normal(x, y, x % 2 ? lean : -lean, 0.0f, 0.4f);
+            b.set_light(x, y, 0.5f, WHITE);
+        }
+    Scene s = finish(b, "corrugated_patch", noise);
+    std::vector<float> var = pixels(s.variance);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            if (in_patch(x, y))
+                for (int c = 0; c < 3; ++c)
+                    var[3 * size_t(y * w + x) + size_t(c)] = 100.0f;
+    s.variance = make_image(w, h, 3, var);
+    return s;
+}
+
+Scene
 shadow_edge(int w, int h, Noise noise)
 {
     Builder b(w, h);

@@ -82,6 +82,14 @@ Scene two_objects(int w, int h, Noise noise = {}, float dark = 0.1f);
 /// sorted by coverage) whose radiance is the coverage-weighted mix.
 Scene two_objects_cryptomatte(int w, int h, Noise noise = {}, float dark = 0.1f);
 
+/// (g) a patch of 8x8 pixels facing the camera, whose variance guide says
+/// every pixel is far above sigma_good, on a nearly noise-free corrugated
+/// surface whose columns lean 66 degrees left and right: none of them passes
+/// the patch's normal test (cosine 0.4), but each 2x2 block's mean normal
+/// faces the camera. Flat light 0.5, albedo 0.5. A window of the patch
+/// fitted on the pyramid's blocks has no good point at full resolution.
+Scene corrugated_patch(int w, int h, Noise noise = {});
+
 /// (f) smooth lighting on a mildly textured plane, with isolated pixels of
 /// zero albedo (emitters, radiance 2.0 x noise), of zero albedo in the blue
 /// channel only, and of NaN, +Inf or -Inf noisy radiance (never adjacent).

@@ -405,6 +405,17 @@ TEST(FilterReference, EveryInstructionSetMatchesTheReference)
     ASSERT_TRUE(zdenoise::set_simd_target(""));
 }
 
+TEST(FilterReference, PyramidWindowWithoutGoodPointsAtFullResolution)
+{
+    // The blocks' range where a window has no fine good point.
+    Case k{ "corrugated patch, pyramid 4", synth::corrugated_patch(W, H, { 1024, 65 }) };
+    k.normal = k.variance = true;
+    k.opt.r_max          = 8;
+    k.opt.pyramid_radius = 4;
+    k.whole_denoise      = true;
+    run_case(k);
+}
+
 TEST(FilterReference, GeometricRadiusGrowth)
 {
     // radius_growth 1.5 tries radii 2, 3, 4, 6, 8 and 2 tries 2, 4, 8 (up

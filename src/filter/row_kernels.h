@@ -39,6 +39,17 @@ struct WindowRange {
     WindowRange() = default;
     /// No point yet: llo = +inf, lhi = -inf.
     static WindowRange empty();
+    /// Whether a point was added (not empty()).
+    bool has_points() const { return llo[0] <= lhi[0]; }
+    /// Extend the range by one point's radiance.
+    void add(float l0, float l1, float l2)
+    {
+        const float l[3] = { l0, l1, l2 };
+        for (int ch = 0; ch < 3; ++ch) {
+            llo[ch] = l[ch] < llo[ch] ? l[ch] : llo[ch];
+            lhi[ch] = l[ch] > lhi[ch] ? l[ch] : lhi[ch];
+        }
+    }
 };
 
 /// For a window fitted on the pyramid (docs/FILTER.md 5.1), what fit_row

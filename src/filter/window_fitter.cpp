@@ -168,6 +168,10 @@ WindowFitter::fit_on_pyramid(int R, int value_buffer)
     // Guide and fit weights, and <z> over the fit points with g > 0, as
     // grow_to() has them at full resolution.
     double zsum = 0.0, zcount = 0.0;
+    // The range of the blocks' radiance: the splat's bound where no
+    // full-resolution point of the window is a good one (a block's mean
+    // normal can pass the centre's test where none of its pixels does).
+    WindowRange blocks = WindowRange::empty();
     for (int by = bya; by <= byb; ++by) {
         const size_t k = size_t(by - bya) * size_t(n);
         const size_t i = c.index(bxa, by);
@@ -183,11 +187,14 @@ WindowFitter::fit_on_pyramid(int R, int value_buffer)
             zcount += m_pyramid->fit_points[iq];
             if (c.cls[iq] & kFitPoint)
                 fw[q] = g[q] * c.fit_prior[iq];
+            if (fw[q] > 0.0f)
+                blocks.add(c.lfit[0][iq], c.lfit[1][iq], c.lfit[2][iq]);
         }
     }
     if (!(zcount > 0.0))
         return wf;
-    wf.mean = float(zsum / zcount);
+    wf.mean  = float(zsum / zcount);
+    wf.range = blocks;
     // e(d) = exp(-d^2/R^2) at fine offsets d = 2 (b - b0).
     const float inv_r2 = 1.0f / float(R * R);
     auto spatial = [&](float d_blocks) {
@@ -252,7 +259,9 @@ WindowFitter::prepare_pyramid_splat(WindowFit& w)
                   &m_in.lfit[1][i], &m_in.lfit[2][i], values + c, &range,
                   win.width(), w.mean, value_scale(w.mean));
     }
-    w.range = WindowRange(range);
+    const WindowRange fine(range);
+    if (fine.has_points())
+        w.range = fine;
 }
 
 
