@@ -200,6 +200,7 @@ WindowSplat(const FeaturePlanes& p, const WindowExtent& e, const float* weight,
     constexpr int F = kWindowFeatures;
     const D d;
     const V zero = hn::Zero(d);
+    const V largest = hn::Set(d, std::numeric_limits<float>::max());
     for_each_vector(p, e, [&](size_t j, size_t k, V dx, V dy, int, int, int) {
         const Points pt = load_features(p, e, j, dx, dy);
         // x^T M^-1 x over the lower triangle (off-diagonal entries doubled).
@@ -216,9 +217,12 @@ WindowSplat(const FeaturePlanes& p, const WindowExtent& e, const float* weight,
             V v = hn::Set(d, fit.beta[0][c]);
             for (int a = 1; a < F; ++a)
                 v = hn::MulAdd(pt.x[a], hn::Set(d, fit.beta[a][c]), v);
+            // The bounds saturate at the largest float, a fit's Inf or NaN
+            // (huge quotients) is bounded too (splat_kernel.cpp says why).
             const V inv = hn::LoadU(d, p.inv_scale[c] + j);
-            const V clamped = hn::Min(hn::Max(v, hn::Mul(hn::Set(d, fit.lo[c]), inv)),
-                                      hn::Mul(hn::Set(d, fit.hi[c]), inv));
+            const V lo = hn::Max(hn::Mul(hn::Set(d, fit.lo[c]), inv), hn::Neg(largest));
+            const V hi = hn::Min(hn::Mul(hn::Set(d, fit.hi[c]), inv), largest);
+            const V clamped = hn::Min(hn::Max(hn::IfThenElseZero(hn::Eq(v, v), v), lo), hi);
             // Where clamped the value no longer moves with z (up to the
             // point attaining the bound): no hat term.
             hat = hn::Add(hat, hn::IfThenElseZero(hn::Eq(clamped, v),

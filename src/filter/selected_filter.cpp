@@ -512,9 +512,14 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
             for (int c = 0; c < 3; ++c) {
                 float& v      = c1[4 * k + size_t(c)];
                 const float a = bound_ia[3 * k + size_t(c)];
-                if (a > 0.0f && bound_lo[3 * k + size_t(c)] <= bound_hi[3 * k + size_t(c)])
-                    v = std::min(std::max(v, bound_lo[3 * k + size_t(c)] * a),
-                                 bound_hi[3 * k + size_t(c)] * a);
+                if (a > 0.0f && bound_lo[3 * k + size_t(c)] <= bound_hi[3 * k + size_t(c)]) {
+                    // Saturated at the largest float, as the splats bound
+                    // theirs (splat_kernel.cpp).
+                    constexpr float largest = std::numeric_limits<float>::max();
+                    const float lo = std::max(bound_lo[3 * k + size_t(c)] * a, -largest);
+                    const float hi = std::min(bound_hi[3 * k + size_t(c)] * a, largest);
+                    v = std::min(std::max(std::isnan(v) ? 0.0f : v, lo), hi);
+                }
                 v = float(double(v) + spread[3 * k + size_t(c)]);
             }
         store(out1[f], sel, c1);

@@ -12,6 +12,8 @@
 #include <hwy/contrib/math/math-inl.h>
 #include <hwy/highway.h>
 
+#include <limits>
+
 #include "../internal.h"
 #include "splat_kernel.h"
 
@@ -77,6 +79,7 @@ splat_lanes(const SplatRow& in)
     const V mean = hn::Set(d, in.mean), value_scale = hn::Set(d, in.value_scale);
     const V clamp = hn::Set(d, kValueClamp), ey = hn::Set(d, in.ey);
     const V inv_r = hn::Set(d, in.inv_r), power = hn::Set(d, in.power);
+    const V largest = hn::Set(d, std::numeric_limits<float>::max());
     V llo[3], lhi[3];
     for (int ch = 0; ch < 3; ++ch) {
         llo[ch] = hn::Set(d, in.range.llo[ch]);
@@ -144,7 +147,13 @@ splat_lanes(const SplatRow& in)
             const V inv_1wm = reciprocal(hn::Add(one, wm));
             const V A = hn::Mul(hn::MulAdd(wm, Zm, Z), inv_1wm);
             const V ia = hn::LoadU(d, in.inv_albedo[ch] + j);
-            const V Al = hn::Min(hn::Max(A, hn::Mul(llo[ch], ia)), hn::Mul(lhi[ch], ia));
+            // The bounds saturate at the largest float: a pixel of albedo
+            // near 0 in a bright window has a bound past it, and a plane
+            // fitted to huge quotients can reach Inf there (NaN: taken as 0,
+            // then bounded).
+            const V lo = hn::Max(hn::Mul(llo[ch], ia), hn::Neg(largest));
+            const V hi = hn::Min(hn::Mul(lhi[ch], ia), largest);
+            const V Al = hn::Min(hn::Max(hn::IfThenElseZero(hn::Eq(A, A), A), lo), hi);
             hn::StoreU(hn::Mul(s, Al), d, in.a[ch] + j);
             if (kHat) {
                 // The blend's weight follows the point too: w_m = r^p with

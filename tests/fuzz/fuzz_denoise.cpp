@@ -8,7 +8,7 @@
 // the RGB channels, other channels copied bit for bit, and a ROI giving
 // exactly the pixels of a whole-image run.
 //
-// Input: 6 bytes of shape and guide flags, 14 bytes of options, then one
+// Input: 6 bytes of shape and guide flags, 19 bytes of options, then one
 // byte per pixel value (cycled; see value()).
 
 #include <algorithm>
@@ -127,6 +127,17 @@ LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     opt.quadrant_power  = bytes.option(opt.quadrant_power);
     opt.centre_stride   = 1 + bytes.next() % 4;  // > r_min + 1: refused
     opt.radius_growth   = bytes.option(opt.radius_growth);
+    // The options of whole-number and 0|1 ranges, a value past each range
+    // now and then (refused): the pyramid (0, 1-3 refused, 4..), the
+    // selection, the edge centres and the outliers' spread.
+    opt.pyramid_radius  = bytes.next() % 8;
+    opt.select          = bytes.next() % 3;
+    opt.stride_edges    = bytes.next() % 3;
+    opt.outlier_spread  = bytes.next() % 3;
+    if (const uint8_t large = bytes.next(); large & 1) {
+        // Windows past the frame's size, as --rmax 32 on a small frame.
+        opt.r_max = opt.r_min + 4 + large % 29;
+    }
 
     const int nchannels = 3 + shape % 3;  // RGB, + alpha, + an AOV
     ImageBuf radiance   = image(bytes, w, h, nchannels);
