@@ -7,14 +7,14 @@
 #   OUT/<scene>/<scene>_albedo.exr           its Denoising Albedo as plain float R,G,B
 #   OUT/<scene>.blend                        the 16-spp scene set up (aux_render.py --blends)
 #
-# Usage: bench/scenes/render_set.sh OUT SCENE... ; environment: SPP ("4 16 64"), SEEDS ("1"),
-#        REF_SPP (2048), RES ("384 384"), BLENDER (blender). Existing files are kept, so an
+# Usage: bench/scenes/render_set.sh OUT SCENE... ; environment: SPP ("4 16 64"), SEEDS ("1 2"),
+#        REF_SPP (4096, as the public set's references), RES ("384 384"), BLENDER (blender). Existing files are kept, so an
 #        interrupted run goes on where it stopped.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 out=$1
 shift
-spp=${SPP:-4 16 64} seeds=${SEEDS:-1} ref_spp=${REF_SPP:-2048} res=${RES:-384 384}
+spp=${SPP:-4 16 64} seeds=${SEEDS:-1 2} ref_spp=${REF_SPP:-4096} res=${RES:-384 384}
 blender=${BLENDER:-blender}
 render() {  # scene out.exr extra-args...
     local scene=$1 file=$2
