@@ -14,11 +14,11 @@ describe(const FilterOptions& o)
 {
     return OIIO::Strutil::fmt::format(
         "rmin={} rmax={} eta={} edge-k={} tau-min={} value-k={} "
-        "sigma-good={} albedo-eps={} depth-tol={} normal-cut={} "
+        "value-noise={} sigma-good={} albedo-eps={} depth-tol={} normal-cut={} "
         "normal-power={} quadrant-power={} stride={} stride-edges={} "
         "radius-growth={} pyramid={} outlier-spread={} select={}",
         o.r_min, o.r_max, o.eta_target, o.edge_k, o.tau_min, o.value_k,
-        o.sigma_good, o.albedo_eps, o.depth_tolerance, o.normal_cut,
+        o.value_noise, o.sigma_good, o.albedo_eps, o.depth_tolerance, o.normal_cut,
         o.normal_power, o.quadrant_power, o.centre_stride, o.stride_edges,
         o.radius_growth, o.pyramid_radius, o.outlier_spread, o.select);
 }

@@ -99,6 +99,9 @@ remodulate(const RefImage& z, const RefImage& La, float albedo_eps)
 
 namespace {
 
+/// Section 3a's t = Phi^-1(1 - 1 / (2 r_max + 1)^2).
+double outlier_t(int r_max);
+
 struct Normal {
     bool none = true;
     double n[3] = { 0, 0, 0 };
@@ -354,11 +357,15 @@ private:
     }
     /// eta and the edge test of section 5 for W's fit over `good`.
     void stop_tests(Window& W, const std::vector<Pt>& good) const;
-    double value_term(int xq, int yq, double m) const
+    /// Section 5's value term of point q in the window of (x0, y0) with
+    /// mean m: its scale is |m| and, with value_noise, t s(p0).
+    double value_term(double zlq, int x0, int y0, double m) const
     {
-        double vt = double(opt.value_k) * std::abs(zl(xq, yq) - m)
-                    / std::max(std::abs(m), EPS);
-        return std::min(vt, 30.0);
+        double den = std::max(std::abs(m), EPS);
+        const double v0 = Vs(x0, y0);
+        if (opt.value_noise && v0 > 0.0 && v0 < INF)
+            den += outlier_t(opt.r_max) * std::sqrt(v0);
+        return std::min(double(opt.value_k) * std::abs(zlq - m) / den, 30.0);
     }
 };
 
@@ -597,7 +604,7 @@ Filter::window(int x0, int y0, int R) const
         p.y = y;
         p.u = double(dx) / R;
         p.v = double(dy) / R;
-        double vt = value_term(x, y, W.m);
+        double vt = value_term(zl(x, y), x0, y0, W.m);
         p.w = gw[i] * std::exp(-(vt + sigma(x, y) + (dx * dx + dy * dy) / R2));
         for (int c = 0; c < 3; ++c)
             p.z[c] = z.at(x, y, c);
@@ -782,9 +789,7 @@ Filter::window_on_pyramid(int x0, int y0, int R) const
         p.u     = b.dx / R;
         p.v     = b.dy / R;
         const double zlb = b.zl / b.P;
-        const double vt  = std::min(double(opt.value_k) * std::abs(zlb - W.m)
-                                        / std::max(std::abs(W.m), EPS),
-                                    30.0);
+        const double vt  = value_term(zlb, x0, y0, W.m);
         p.w = b.g * b.P * std::exp(-(vt + (b.dx * b.dx + b.dy * b.dy) / R2));
         for (int c = 0; c < 3; ++c)
             p.z[c] = b.z[c] / b.P;
@@ -832,10 +837,10 @@ Filter::window_on_pyramid(int x0, int y0, int R) const
 // there) and its brightest same-surface 3x3 neighbour is capped at the
 // larger of the two; t = Phi^-1(1 - 1 / (2 r_max + 1)^2). Decided on the
 // original values, then applied.
-void
-Filter::split_outliers()
+double
+outlier_t(int r_max)
 {
-    const double n = double(2 * opt.r_max + 1) * double(2 * opt.r_max + 1);
+    const double n = double(2 * r_max + 1) * double(2 * r_max + 1);
     // Phi^-1(1 - 1/n) by Newton's method on the normal tail Q(t) = 1/n.
     double t = 3.0;
     for (int k = 0; k < 50; ++k) {
@@ -843,6 +848,13 @@ Filter::split_outliers()
         const double pdf = std::exp(-0.5 * t * t) / std::sqrt(2.0 * M_PI);
         t += (q - 1.0 / n) / pdf;
     }
+    return t;
+}
+
+void
+Filter::split_outliers()
+{
+    const double t = outlier_t(opt.r_max);
     auto med = [](std::vector<double> v) {
         std::sort(v.begin(), v.end());
         const size_t k = v.size();
@@ -990,7 +1002,7 @@ Filter::run(RefStats* stats, RefImage* diagnostics)
                       : (dx < 0 && dy >= 0)  ? 1
                       : (dx < 0 && dy < 0)   ? 2
                                              : 3;
-                double vt = fitpt(xq, yq) ? value_term(xq, yq, fin.m) : 0.0;
+                double vt = fitpt(xq, yq) ? value_term(zl(xq, yq), x0, y0, fin.m) : 0.0;
                 double s  = gq * std::exp(-(vt + (dx * dx + dy * dy) / R2));
                 for (int c = 0; c < 3; ++c) {
                     double Z = fin.whole.at(c, u, v);

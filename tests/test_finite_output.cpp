@@ -77,6 +77,7 @@ option_ranges()
         { "centre_stride", [](O& o, double v) { o.centre_stride = int(v); }, { 1, 2, 3, 8 } },
         { "stride_edges", [](O& o, double v) { o.stride_edges = int(v); }, { 0, 1 } },
         { "outlier_spread", [](O& o, double v) { o.outlier_spread = int(v); }, { 0, 1 } },
+        { "value_noise", [](O& o, double v) { o.value_noise = int(v); }, { 0, 1 } },
         { "select", [](O& o, double v) { o.select = int(v); }, { 0, 1 } },
         { "pyramid_radius", [](O& o, double v) { o.pyramid_radius = int(v); }, { 0, 4, 8, 16 } },
     };

@@ -383,6 +383,10 @@ WindowFitter::process(int x0, int y0, int& radius, bool splat_window)
     m_zcount = 0;
     m_range  = WindowRange::empty();
     m_guide.centre(x0, y0);
+    // The value term's noise: section 3's smoothed variance at the centre
+    // (none where it is undefined).
+    const float vs0 = m_in.vs[m_in.index(x0, y0)];
+    m_centre_noise  = vs0 > 0.0f && vs0 < INFINITY ? m_value_noise_t * std::sqrt(vs0) : 0.0f;
 
     WindowFit previous, current;
     StopReason reason = StopReason::Size;

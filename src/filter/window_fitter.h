@@ -14,6 +14,7 @@
 #include "fit_kernel.h"
 #include "guide_kernel.h"
 #include "guide_weight.h"
+#include "outliers.h"
 #include "plane_fit.h"
 #include "pyramid_level.h"
 #include "row_kernels.h"
@@ -75,6 +76,7 @@ public:
         , m_guide(in, opt)
         , m_pyramid(pyramid)
         , m_coarse_guide(pyramid ? pyramid->in : in, opt)
+        , m_value_noise_t(opt.value_noise ? outlier_threshold(opt.r_max) : 0.0f)
         , m_side(2 * opt.r_max + 1)
         , m_g(cache_size(), 0.0f)
         , m_fit_weight(cache_size(), 0.0f)
@@ -142,7 +144,7 @@ private:
     /// in exp_neg so that weights never underflow).
     float value_scale(float mean) const
     {
-        return m_opt.value_k / std::max(std::fabs(mean), float(kEps));
+        return m_opt.value_k / (std::max(std::fabs(mean), float(kEps)) + m_centre_noise);
     }
     // noinline: the three stages stay separate in profiles
     // (docs/PERFORMANCE.md); a call per window or radius costs nothing.
@@ -190,6 +192,9 @@ private:
     GuideWeight m_guide;
     const PyramidLevel* m_pyramid;  ///< null: every fit at full resolution
     GuideWeight m_coarse_guide;     ///< on m_pyramid's level
+    /// t of the value term's noise (docs/FILTER.md section 5), 0 without
+    /// value_noise; and t s(p0) of the window's centre.
+    float m_value_noise_t, m_centre_noise = 0.0f;
     /// Level 1's guide and fit weights over a window, its value factors
     /// (not kept) and e(dx) of its columns.
     std::vector<float> m_coarse_g, m_coarse_fit_weight, m_coarse_values,

@@ -106,6 +106,7 @@ Filter parameters (docs/FILTER.md):
 {--edge-k}
 {--tau-min}
 {--value-k}
+{--value-noise}
 {--sigma-good}
 {--albedo-eps}
 {--depth-tol}
@@ -267,6 +268,10 @@ options()
           "Strong-variation stop: smallest level (0.05)" }),
         parameter({ Kind::Real, "--value-k", "value-k", FIELD(job.filter.value_k), "X",
           "Strength of the value weight (1)" }),
+        parameter({ Kind::Whole, "--value-noise", "value-noise", FIELD(job.filter.value_noise), "0|1",
+          "1: the value weight's scale adds the centre's noise\n"
+          "(t standard deviations), so that noise is not taken\n"
+          "for structure; 0: the method's |<z>| alone (1)" }),
         parameter({ Kind::Real, "--sigma-good", "sigma-good", FIELD(job.filter.sigma_good), "X",
           "Noisiest point taking part in fits (3)" }),
         parameter({ Kind::Real, "--albedo-eps", "albedo-eps", FIELD(job.filter.albedo_eps), "X",

@@ -134,10 +134,14 @@ LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     opt.select          = bytes.next() % 3;
     opt.stride_edges    = bytes.next() % 3;
     opt.outlier_spread  = bytes.next() % 3;
-    if (const uint8_t large = bytes.next(); large & 1) {
+    const uint8_t large = bytes.next();
+    if (large & 1) {
         // Windows past the frame's size, as --rmax 32 on a small frame.
         opt.r_max = opt.r_min + 4 + large % 29;
     }
+    // The value term's noise scale from the same byte's top bits (a byte
+    // of its own would shift the corpus's inputs).
+    opt.value_noise = (large >> 6) % 3;
 
     const int nchannels = 3 + shape % 3;  // RGB, + alpha, + an AOV
     ImageBuf radiance   = image(bytes, w, h, nchannels);
