@@ -113,6 +113,7 @@ public:
     Filter(const RefImage& z, const RefImage& La, const RefGuides& g,
            const FilterOptions& opt)
         : z(z), z_in(z), La(La), g(g), opt(opt), w(z.w), h(z.h)
+        , value_noise_t(opt.value_noise ? outlier_t(opt.r_max) : 0.0)
     {
     }
 
@@ -125,6 +126,7 @@ private:
     const RefGuides& g;
     const FilterOptions& opt;
     int w, h;
+    double value_noise_t;  // section 5's t, 0 without value_noise
 
     // per-pixel facts
     std::vector<char> surface_, fitpt_, receiver_;  // receiver_: 3 per pixel
@@ -363,8 +365,8 @@ private:
     {
         double den = std::max(std::abs(m), EPS);
         const double v0 = Vs(x0, y0);
-        if (opt.value_noise && v0 > 0.0 && v0 < INF)
-            den += outlier_t(opt.r_max) * std::sqrt(v0);
+        if (v0 > 0.0 && v0 < INF)
+            den += value_noise_t * std::sqrt(v0);
         return std::min(double(opt.value_k) * std::abs(zlq - m) / den, 30.0);
     }
 };

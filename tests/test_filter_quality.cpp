@@ -495,4 +495,3 @@ TEST(FilterQuality, NanHoleIsFilledFromTheLightAroundIt)
         EXPECT_NEAR(mean, truth, 0.03 * truth) << mode;
     }
 }
-
