@@ -41,6 +41,20 @@ paropt_any_length(int nthreads)
     return OIIO::paropt(nthreads, OIIO::paropt::SplitDir::Y, 1);
 }
 
+/// Run `body(begin, end)` over disjoint ranges covering [0, n), in
+/// parallel: for per-pixel loops whose every index writes only its own
+/// outputs (the result does not depend on the split).
+template<class F>
+void
+for_ranges(size_t n, int nthreads, F&& body)
+{
+    OIIO::parallel_for_range(int64_t(0), int64_t(n),
+                             [&](int64_t b, int64_t e) {
+                                 body(size_t(b), size_t(e));
+                             },
+                             paropt_any_length(nthreads));
+}
+
 /// Rec.709 luminance weights: the scalar view of an RGB quotient.
 constexpr float kLumaWeights[3] = { 0.2126f, 0.7152f, 0.0722f };
 

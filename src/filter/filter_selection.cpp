@@ -203,35 +203,41 @@ select_by_risk(ImageBuf& dst, const std::vector<const ImageBuf*>& candidates,
     std::vector<double> best(n, 0.0);
     for (int k = 1; k < K; ++k) {
         std::vector<double> d(n, 0.0), d2(n, 0.0), m(n, 0.0);
-        for (size_t i = 0; i < n; ++i) {
-            const float a = r[size_t(k)][i], b = r[0][i];
-            if (std::isfinite(a) && std::isfinite(b)) {
-                d[i]  = double(a) - b;
-                d2[i] = d[i] * d[i];
-                m[i]  = 1.0;
+        detail::for_ranges(n, nthreads, [&](size_t ib, size_t ie) {
+            for (size_t i = ib; i < ie; ++i) {
+                const float a = r[size_t(k)][i], b = r[0][i];
+                if (std::isfinite(a) && std::isfinite(b)) {
+                    d[i]  = double(a) - b;
+                    d2[i] = d[i] * d[i];
+                    m[i]  = 1.0;
+                }
             }
-        }
+        });
         const std::vector<double> s1 = box_sum(d, w, h, o.risk_radius, nthreads);
         const std::vector<double> s2 = box_sum(d2, w, h, o.risk_radius, nthreads);
         const std::vector<double> cnt = box_sum(m, w, h, o.risk_radius, nthreads);
-        for (size_t i = 0; i < n; ++i) {
-            if (cnt[i] < 2.0)
-                continue;
-            const double mean = s1[i] / cnt[i];
-            const double var  = std::max(0.0, s2[i] / cnt[i] - mean * mean);
-            const double se   = std::sqrt(var / (cnt[i] - 1.0));
-            if (mean < -o.confidence * se && mean < best[i]) {
-                best[i]   = mean;
-                choice[i] = k;
+        detail::for_ranges(n, nthreads, [&](size_t ib, size_t ie) {
+            for (size_t i = ib; i < ie; ++i) {
+                if (cnt[i] < 2.0)
+                    continue;
+                const double mean = s1[i] / cnt[i];
+                const double var  = std::max(0.0, s2[i] / cnt[i] - mean * mean);
+                const double se   = std::sqrt(var / (cnt[i] - 1.0));
+                if (mean < -o.confidence * se && mean < best[i]) {
+                    best[i]   = mean;
+                    choice[i] = k;
+                }
             }
-        }
+        });
     }
     // Blend weights: the one-hot choice averaged over the map's box.
     std::vector<std::vector<double>> alpha(static_cast<size_t>(K));
     for (int k = 0; k < K; ++k) {
         std::vector<double> onehot(n);
-        for (size_t i = 0; i < n; ++i)
-            onehot[i] = choice[i] == k ? 1.0 : 0.0;
+        detail::for_ranges(n, nthreads, [&](size_t ib, size_t ie) {
+            for (size_t i = ib; i < ie; ++i)
+                onehot[i] = choice[i] == k ? 1.0 : 0.0;
+        });
         alpha[size_t(k)] = box_sum(onehot, w, h, o.map_radius, nthreads);
     }
     const size_t nout = roi.npixels();
@@ -239,30 +245,32 @@ select_by_risk(ImageBuf& dst, const std::vector<const ImageBuf*>& candidates,
     ROI roi3    = roi;
     roi3.chbegin = 0;
     roi3.chend   = 3;
-    std::vector<double> acc(3 * nout, 0.0), total(nout, 0.0);
-    for (int k = 0; k < K; ++k) {
-        const std::vector<float> c = detail::read_channels(*candidates[size_t(k)], roi3, 0, 3);
-        for (int y = roi.ybegin; y < roi.yend; ++y)
-            for (int x = roi.xbegin; x < roi.xend; ++x) {
-                const size_t o_ = size_t(y - roi.ybegin) * size_t(roi.width())
-                                  + size_t(x - roi.xbegin);
-                const size_t i = size_t(y - region.ybegin) * size_t(w)
-                                 + size_t(x - region.xbegin);
+    std::vector<std::vector<float>> c(static_cast<size_t>(K));
+    for (int k = 0; k < K; ++k)
+        c[size_t(k)] = detail::read_channels(*candidates[size_t(k)], roi3, 0, 3);
+    // Each pixel adds its candidates in the order k = 0, 1, ...
+    detail::for_rows(roi, nthreads, [&](int y) {
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const size_t o_ = size_t(y - roi.ybegin) * size_t(roi.width())
+                              + size_t(x - roi.xbegin);
+            const size_t i = size_t(y - region.ybegin) * size_t(w)
+                             + size_t(x - region.xbegin);
+            double acc[3] = { 0.0, 0.0, 0.0 }, total = 0.0;
+            for (int k = 0; k < K; ++k) {
                 const double a = alpha[size_t(k)][i];
                 for (int ch = 0; ch < 3; ++ch)
-                    acc[3 * o_ + ch] += a * c[3 * o_ + ch];
-                total[o_] += a;
+                    acc[ch] += a * c[size_t(k)][3 * o_ + size_t(ch)];
+                total += a;
                 if (weights)
                     wout[size_t(K) * o_ + size_t(k)] = float(a);
             }
-    }
-    for (size_t i = 0; i < nout; ++i) {
-        for (int ch = 0; ch < 3; ++ch)
-            out[3 * i + ch] = float(acc[3 * i + ch] / total[i]);
-        if (weights)
-            for (int k = 0; k < K; ++k)
-                wout[size_t(K) * i + size_t(k)] /= float(total[i]);
-    }
+            for (int ch = 0; ch < 3; ++ch)
+                out[3 * o_ + size_t(ch)] = float(acc[ch] / total);
+            if (weights)
+                for (int k = 0; k < K; ++k)
+                    wout[size_t(K) * o_ + size_t(k)] /= float(total);
+        }
+    });
     if (!dst.set_pixels(roi3, TypeFloat, out.data()))
         return false;
     if (weights) {

@@ -306,22 +306,26 @@ filter_halves(ImageBuf& dst, const ImageBuf& albedo, const Guides& guides,
         o[k] = read_channels(half_out0[k], pil, 0, 3);
     }
     dif2.assign(np, 0.0f);
-    for (size_t i = 0; i < np; ++i)
-        if (s[i] > 0.0f) {
-            const float d = luminance(&o[0][3 * i]) - luminance(&o[1][3 * i]);
-            dif2[i]       = d * d;
-        }
+    for_ranges(np, nthreads, [&](size_t b, size_t e) {
+        for (size_t i = b; i < e; ++i)
+            if (s[i] > 0.0f) {
+                const float d = luminance(&o[0][3 * i]) - luminance(&o[1][3 * i]);
+                dif2[i]       = d * d;
+            }
+    });
     for (int k = 0; k < 2; ++k) {
         const std::vector<float> z = read_channels(half_z[k], pil, 0, 3);
         std::vector<float> pv(4 * np), fz(3 * np, NAN);
-        for (size_t i = 0; i < np; ++i) {
-            for (int c = 0; c < 3; ++c) {
-                pv[4 * i + c] = o[k][3 * i + c];
-                if (s[i] > 0.0f)
-                    fz[3 * i + c] = z[3 * i + c];
+        for_ranges(np, nthreads, [&](size_t b, size_t e) {
+            for (size_t i = b; i < e; ++i) {
+                for (int c = 0; c < 3; ++c) {
+                    pv[4 * i + c] = o[k][3 * i + c];
+                    if (s[i] > 0.0f)
+                        fz[3 * i + c] = z[3 * i + c];
+                }
+                pv[4 * i + 3] = 0.5f * dif2[i];
             }
-            pv[4 * i + 3] = 0.5f * dif2[i];
-        }
+        });
         ImageBuf pilot = float_image(pil, frame, 4), fitted = float_image(pil, frame, 3);
         store(pilot, pil, pv);
         store(fitted, pil, fz);
@@ -429,9 +433,14 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         o0 = read_channels(out0, pil, 0, 3);
         // Candidate 0's light and D over k0reg (D: 1 with halves, unused).
         o0_l = read_channels(out0, k0reg, 0, 3);
-        for (size_t k = 0; k < k0reg.npixels(); ++k)
-            o0_l[k] = luminance(&o0_l[3 * k]);
-        o0_l.resize(k0reg.npixels());
+        {
+            std::vector<float> l(k0reg.npixels());
+            for_ranges(l.size(), nthreads, [&](size_t b, size_t e) {
+                for (size_t k = b; k < e; ++k)
+                    l[k] = luminance(&o0_l[3 * k]);
+            });
+            o0_l = std::move(l);
+        }
         d0_k0 = halves ? std::vector<float>(k0reg.npixels(), 1.0f)
                        : read_channels(hat0, k0reg, 0, 1);
         for_rows(pil, nthreads, [&](int y) {
@@ -477,7 +486,7 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
             pilot_var[i] = 0.25f * dif2[i];
     } else {
         // sum_j H_qj^2 sigma_j^2 ~ D sigma^2.
-        for (int y = pil.ybegin; y < pil.yend; ++y)
+        for_rows(pil, nthreads, [&](int y) {
             for (int x = pil.xbegin; x < pil.xend; ++x) {
                 const size_t i = size_t(y - pil.ybegin) * size_t(pil.width())
                                  + size_t(x - pil.xbegin);
@@ -485,15 +494,18 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                                       + size_t(x - k0reg.xbegin)];
                 pilot_var[i] = sigma2[i] * std::min(std::max(d, 0.0f), 1.0f);
             }
+        });
     }
     ImageBuf pilot = float_image(pil, frame, 4);
     {
         std::vector<float> pv(4 * np);
-        for (size_t i = 0; i < np; ++i) {
-            for (int c = 0; c < 3; ++c)
-                pv[4 * i + c] = o0[3 * i + c];
-            pv[4 * i + 3] = pilot_var[i];
-        }
+        for_ranges(np, nthreads, [&](size_t b, size_t e) {
+            for (size_t i = b; i < e; ++i) {
+                for (int c = 0; c < 3; ++c)
+                    pv[4 * i + c] = o0[3 * i + c];
+                pv[4 * i + 3] = pilot_var[i];
+            }
+        });
         store(pilot, pil, pv);
     }
 
@@ -508,20 +520,22 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                                 nthreads))
             return fail(out1[f]);
         std::vector<float> c1 = read_channels(out1[f], sel, 0, 4);
-        for (size_t k = 0; k < sel.npixels(); ++k)
-            for (int c = 0; c < 3; ++c) {
-                float& v      = c1[4 * k + size_t(c)];
-                const float a = bound_ia[3 * k + size_t(c)];
-                if (a > 0.0f && bound_lo[3 * k + size_t(c)] <= bound_hi[3 * k + size_t(c)]) {
-                    // Saturated at the largest float, as the splats bound
-                    // theirs (splat_kernel.cpp).
-                    constexpr float largest = std::numeric_limits<float>::max();
-                    const float lo = std::max(bound_lo[3 * k + size_t(c)] * a, -largest);
-                    const float hi = std::min(bound_hi[3 * k + size_t(c)] * a, largest);
-                    v = std::min(std::max(std::isnan(v) ? 0.0f : v, lo), hi);
+        for_ranges(sel.npixels(), nthreads, [&](size_t b, size_t e) {
+            for (size_t k = b; k < e; ++k)
+                for (int c = 0; c < 3; ++c) {
+                    float& v      = c1[4 * k + size_t(c)];
+                    const float a = bound_ia[3 * k + size_t(c)];
+                    if (a > 0.0f && bound_lo[3 * k + size_t(c)] <= bound_hi[3 * k + size_t(c)]) {
+                        // Saturated at the largest float, as the splats bound
+                        // theirs (splat_kernel.cpp).
+                        constexpr float largest = std::numeric_limits<float>::max();
+                        const float lo = std::max(bound_lo[3 * k + size_t(c)] * a, -largest);
+                        const float hi = std::min(bound_hi[3 * k + size_t(c)] * a, largest);
+                        v = std::min(std::max(std::isnan(v) ? 0.0f : v, lo), hi);
+                    }
+                    v = float(double(v) + spread[3 * k + size_t(c)]);
                 }
-                v = float(double(v) + spread[3 * k + size_t(c)]);
-            }
+        });
         store(out1[f], sel, c1);
     }
 
@@ -535,7 +549,7 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         const std::vector<float> z = read_channels(quotient, sel, 0, 3);
         const std::vector<float> a = read_channels(albedo, sel, 0, 3);
         std::vector<float> c0(4 * ns), v(ns), w(ns);
-        for (int y = sel.ybegin; y < sel.yend; ++y)
+        for_rows(sel, nthreads, [&](int y) {
             for (int x = sel.xbegin; x < sel.xend; ++x) {
                 const size_t k = size_t(y - sel.ybegin) * size_t(sel.width())
                                  + size_t(x - sel.xbegin);
@@ -557,6 +571,7 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                            ? NAN
                            : float(al * al / (o_l * o_l * al * al + 0.01));
             }
+        });
         store(cand0, sel, c0);
         store(var, sel, v);
         store(weight, sel, w);
@@ -590,7 +605,7 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
     // fit points (elsewhere both candidates pass the pixel through).
     std::vector<float> out = read_channels(out0, roi, 0, nch);
     const std::vector<float> rgb = read_channels(chosen, roi, 0, 3);
-    for (int y = roi.ybegin; y < roi.yend; ++y)
+    for_rows(roi, nthreads, [&](int y) {
         for (int x = roi.xbegin; x < roi.xend; ++x) {
             const size_t k = size_t(y - roi.ybegin) * size_t(roi.width())
                              + size_t(x - roi.xbegin);
@@ -600,6 +615,7 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                 for (int c = 0; c < 3; ++c)
                     out[size_t(nch) * k + size_t(c)] = rgb[3 * k + size_t(c)];
         }
+    });
     if (!dst.set_pixels(roi, TypeFloat, out.data())) {
         dst.errorfmt("regression_filter: could not store the result");
         return false;
