@@ -11,6 +11,7 @@
 #include <limits>
 
 #include "internal.h"
+#include "median_kernel.h"
 
 namespace zdenoise {
 namespace detail {
@@ -55,12 +56,29 @@ robust_variance(const FilterInputs& in, const RawVariance& e, int nthreads)
 {
     RawVariance var(in.region.npixels(), kUndefined);
     auto fit = [&](size_t i) { return fit_point(in, i); };
+    const int w = in.width;
     for_rows(in.region, nthreads, [&](int y) {
+        // The boxes wholly inside the region, a row at a time
+        // (median_kernel.h); the rest, and boxes holding a NaN, one by one.
+        const int y0 = y - in.region.ybegin;
+        std::vector<float> boxed;
+        if (y0 >= 2 && y0 + 2 < in.height && w > 4) {
+            const float* rows[5];
+            for (int dy = 0; dy < 5; ++dy)
+                rows[dy] = &e[size_t(y0 - 2 + dy) * size_t(w)];
+            boxed.resize(size_t(w - 4));
+            median5x5_row(rows, w - 4, boxed.data());
+        }
         float window[25];
         for (int x = in.region.xbegin; x < in.region.xend; ++x) {
             const size_t i = in.index(x, y);
             if (!fit(i))
                 continue;
+            const int bx = x - in.region.xbegin - 2;
+            if (bx >= 0 && size_t(bx) < boxed.size() && !std::isnan(boxed[size_t(bx)])) {
+                var[i] = boxed[size_t(bx)] / kChi2Median;
+                continue;
+            }
             int n = 0;
             for (int dy = -2; dy <= 2; ++dy)
                 for (int dx = -2; dx <= 2; ++dx)
