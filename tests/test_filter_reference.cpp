@@ -386,6 +386,13 @@ TEST(FilterReference, EveryInstructionSetMatchesTheReference)
         p.opt.normal_power   = 2.0f;
         p.opt.quadrant_power = 3.0f;
         run_case(p);
+        // --preset spec: the method's own defaults (radius growth 1, no
+        // outlier spread, the method's value term, every fit point a centre).
+        Case m{ "staircase, --preset spec", synth::staircase(W, H, 5, { 16, 45 }) };
+        m.normal = m.depth = true;
+        m.opt       = zdenoise::FilterOptions::algorithm_defaults();
+        m.opt.r_max = 5;
+        run_case(m);
         // Today's filter with its hat diagonal (the selection's candidate 0).
         zdenoise::FilterOptions opt;
         opt.select = 0;
