@@ -7,6 +7,7 @@
 // drops the comparators the 13th output does not depend on. A lane is a
 // pixel: 25 vector loads (one per box offset), then only Min and Max.
 
+#include <algorithm>
 #include <cmath>
 #include <utility>
 
@@ -48,8 +49,7 @@ median_network()
             for (int j = k % p; j <= n - 1 - k; j += 2 * k)
                 for (int i = 0; i <= std::min(k - 1, n - j - k - 1); ++i)
                     if ((i + j) / (2 * p) == (i + j + k) / (2 * p)
-                        && i + j + k < kBoxValues)
-                        {
+                        && i + j + k < kBoxValues) {
                         c.pair[c.count].a   = i + j;
                         c.pair[c.count++].b = i + j + k;
                     }
