@@ -265,6 +265,8 @@ TEST_F(StreamTest, StripsOfTiledFilesOffsetWindowsAndLayersAreExact)
     } cases[] = {
         { "beauty", "", "1", "64" },
         { "layers", " --mode layers --aovs -d float", "23", "70" },
+        // The layers' colours prefiltered: 5 rows more for the prefilter.
+        { "layers, prefiltered colours", " --mode layers --albedo-samples 4", "23", "75" },
         { "guide file", " --normal:ch=\"Denoising Normal\" " + path("guides.exr"), "50", "64" },
         { "today's filter", " --select 0", "1", "20" },
     };

@@ -3,6 +3,8 @@
 
 #include "albedo_plan.h"
 
+#include <algorithm>
+
 #include <OpenImageIO/strutil.h>
 
 #include "failure.h"
@@ -117,6 +119,47 @@ plan_albedo(const Job& j, InputFiles& files, const Convention& conv,
                       : std::string("  albedo    not prefiltered: its samples "
                                     "per pixel are not in the file (give "
                                     "--albedo-samples N)"));
+    return a;
+}
+
+
+AlbedoPlan
+plan_layer_colours(const Job& j, InputFiles& files, LayersPlan& layers,
+                   std::vector<std::string>& log)
+{
+    AlbedoPlan a;
+    std::vector<LayersPlan::One*> own;
+    for (LayersPlan::One& one : layers.layers) {
+        const bool from_in = !one.albedo.empty()
+                             && std::all_of(one.albedo.begin(), one.albedo.end(),
+                                            [&](const Selection& s) {
+                                                return s.path == j.in.path;
+                                            });
+        if (from_in && one.remodulation.empty())
+            own.push_back(&one);
+    }
+    if (own.empty())
+        return a;
+    std::string name = "--albedo-samples";
+    if (j.no_albedo_prefilter) {
+        log.push_back("  colours   not prefiltered (--no-albedo-prefilter)");
+        return a;
+    }
+    a.prefilter = j.albedo_samples > 0
+                      ? j.albedo_samples
+                      : cycles_samples(files, own.front()->albedo.front(), name);
+    if (!a.prefilter) {
+        log.push_back("  colours   not prefiltered: their samples per pixel are "
+                      "not in the file (give --albedo-samples N)");
+        return a;
+    }
+    std::string names;
+    for (LayersPlan::One* one : own) {
+        one->prefilter = a.prefilter;
+        names += (names.empty() ? "" : ", ") + one->name;
+    }
+    log.push_back(format("  colours   prefiltered as {} samples a pixel ({}): {}",
+                         a.prefilter, name, names));
     return a;
 }
 

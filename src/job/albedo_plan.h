@@ -5,7 +5,8 @@
 // render's own prefiltered (docs/FILTER.md section 12), or with --aux the
 // auxiliary albedo checked against and pooled with the render's own
 // (docs/AUX.md, "Wrong auxiliary pixels"). A step of plan() and of
-// run_strip() (job.cpp), beauty mode.
+// run_strip() (job.cpp), beauty mode; in layers mode, which of the
+// layers' colours are prefiltered.
 
 #pragma once
 
@@ -17,6 +18,7 @@
 #include "input_files.h"
 #include "job.h"
 #include "layer_conventions.h"
+#include "layers_plan.h"
 
 namespace zdenoise {
 namespace job {
@@ -48,6 +50,17 @@ AlbedoPlan
 plan_albedo(const Job& j, InputFiles& files, const Convention& conv,
             RoleSelections& roles, const OIIO::ROI& noisy,
             std::vector<std::string>& log);
+
+/// Layers mode: mark the layers whose colour is the render's own AOV (an
+/// average of the pixel's samples, as Cycles' DiffCol, GlossCol, TransCol
+/// and the residual's Denoising Albedo; not an --aux colour) to be
+/// prefiltered like beauty mode's albedo, the samples from --albedo-samples
+/// or the file's Cycles metadata. The plan returned carries the samples
+/// (its halo and its zdenoise.parameters entry); make_albedo() is not for
+/// it. Says what it decided in `log`.
+AlbedoPlan
+plan_layer_colours(const Job& j, InputFiles& files, LayersPlan& layers,
+                   std::vector<std::string>& log);
 
 /// The strip's albedo by plan `a`, over `region` (what the filter reads):
 /// `albedo` pooled with `own` (which is then freed), then prefiltered.

@@ -186,6 +186,7 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
         if (j.aux.given)
             use_aux_colours(p.layers, files, j, layer_args, aux, p.noisy,
                             result.log);
+        p.albedo = plan_layer_colours(j, files, p.layers, result.log);
     }
     log_mode(j, conv, p, layer_args, mode_line, result.log);
 
@@ -333,9 +334,10 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
     convert_role(p, img.half_b, p.spaces.input, p.spaces.working, j.half_b);
     // Over what the filter reads: the strip and its halo (and with
     // --temporal, the light test's box around it).
-    make_albedo(p.albedo, img.albedo, img.own_albedo,
-                strip.widened(filter_halo(j.filter) + temporal_reach(j)),
-                strip.core, j.threads, p.pooled, j.albedo.path);
+    if (!p.layered)  // the layers' colours: load_layers()
+        make_albedo(p.albedo, img.albedo, img.own_albedo,
+                    strip.widened(filter_halo(j.filter) + temporal_reach(j)),
+                    strip.core, j.threads, p.pooled, j.albedo.path);
     if (j.temporal > 0)
         combine_neighbours(j, p, files, strip, img, result);
     auto guide = [](const OptionalRole& o, const ImageBuf& image) {

@@ -160,6 +160,29 @@ use_aux_colours(LayersPlan& plan, InputFiles& files, const Job& j,
 }
 
 
+namespace {
+
+/// The layer's own colour prefiltered (docs/LAYERS.md, "Colours"), over
+/// the strip's rows (the strip reads the prefilter's halo beyond what the
+/// filter and the residual's mask read): a colour the radiance came divided
+/// by stays as the renderer divided by it and the clean one remodulates
+/// (`remodulation`); a colour the filter divides by is replaced.
+void
+prefilter_colour(const LayersPlan::One& one, const Job& j, ImageBuf& colour,
+                 ImageBuf& remodulation)
+{
+    ImageBuf clean;
+    if (!prefilter_albedo(clean, colour, one.prefilter, {}, j.threads))
+        fail(format("layer '{}' of '{}': {}", one.name, j.in.path,
+                    one_line(clean.geterror())));
+    // A swap, not a move: OIIO 2.4 leaves a moved-from ImageBuf without
+    // its implementation.
+    clean.swap(one.divided ? remodulation : colour);
+}
+
+}  // namespace
+
+
 /// Read the strip's layers and residual as `plan` says.
 std::vector<Layer>
 load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
@@ -180,13 +203,15 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
             l.radiance[i] = strip.sum(one.radiance);
         // The residual layer's albedo is masked below: a copy of its own.
         l.albedo[i]         = strip.sum(one.albedo, i < given);
+        if (one.prefilter)
+            prefilter_colour(one, j, l.albedo[i], l.remodulation[i]);
         layers[i].name      = one.name;
         layers[i].radiance  = &l.radiance[i];
         layers[i].albedo    = &l.albedo[i];
-        if (!one.remodulation.empty()) {
-            l.remodulation[i]              = strip.sum(one.remodulation, true);
+        if (!one.remodulation.empty())
+            l.remodulation[i] = strip.sum(one.remodulation, true);
+        if (l.remodulation[i].initialized())
             layers[i].remodulation_albedo = &l.remodulation[i];
-        }
         layers[i].divided   = one.divided;
         layers[i].reflected = one.reflected;
         layers[i].denoised  = &l.denoised[i];

@@ -33,6 +33,9 @@ struct LayersPlan {
         /// A cleaner colour of the layer (the --aux file's), or none.
         std::vector<Selection> remodulation;
         bool divided = false, reflected = false;
+        /// Samples a pixel of its colour, the render's own AOV, which
+        /// load_layers() prefilters (plan_layer_colours()); 0: as it is.
+        int prefilter = 0;
     };
     std::vector<One> layers;  ///< the given ones, then the residual's
     /// The residual's terms; none: the beauty minus the given layers.

@@ -190,13 +190,14 @@ options()
         not_in_file_name({ Kind::Halves, "--halves", "halves", {}, "A B",
           "Two independent half renders (radiance = (A+B)/2)." }),
         { Kind::Whole, "--albedo-samples", "albedo-samples", FIELD(job.albedo_samples), "N",
-          "Samples per pixel of the render's albedo, which is\n"
-          "prefiltered where it is noisy (docs/FILTER.md section\n"
-          "12), and with --aux pooled with the aux's (docs/AUX.md).\n"
-          "Default: a Cycles file's count." },
+          "Samples per pixel of the render's albedo (--mode layers:\n"
+          "of its lobe colours), which is prefiltered where it is\n"
+          "noisy (docs/FILTER.md section 12), and with --aux pooled\n"
+          "with the aux's (docs/AUX.md). Default: a Cycles file's\n"
+          "count." },
         { Kind::Flag, "--no-albedo-prefilter", "no-albedo-prefilter", FIELD(job.no_albedo_prefilter), "",
-          "Take the albedo as it is (with --aux: pooled, not\n"
-          "prefiltered)." },
+          "Take the albedo (--mode layers: the lobe colours) as it\n"
+          "is (with --aux: pooled, not prefiltered)." },
         shown_as("--no-normal, --no-depth, --no-id", { Kind::Flag, "--no-normal", "no-normal", FIELD(job.no_normal), "",
           "Do not use the guide picked by default." }),
         { Kind::Flag, "--no-depth", "no-depth", FIELD(job.no_depth), "", nullptr },
