@@ -5,11 +5,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imagebufalgo_util.h>
+#include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
 
+#include "../internal.h"
 #include "failure.h"
 
 namespace zdenoise {
@@ -30,6 +34,25 @@ namespace {
 /// anti-aliased edge has pixels whose few coverage samples all missed it,
 /// and the filter gives them their share of its light. All three images
 /// are float.
+/// Whether any of the n elements within r of each element (the window
+/// clipped at both ends, `stride` apart) is set: a running count, so that
+/// its cost does not grow with r.
+void
+any_within(const uint8_t* in, uint8_t* out, int n, size_t stride, int r)
+{
+    int count = 0;  // set elements in [i - r, i + r]
+    for (int i = 0; i < std::min(r, n); ++i)
+        count += in[size_t(i) * stride];
+    for (int i = 0; i < n; ++i) {
+        if (i + r < n)
+            count += in[size_t(i + r) * stride];
+        if (i - r - 1 >= 0)
+            count -= in[size_t(i - r - 1) * stride];
+        out[size_t(i) * stride] = count > 0;
+    }
+}
+
+
 void
 mask_negligible_residual(ImageBuf& albedo, const ImageBuf& residual,
                          const ImageBuf& beauty, int reach, int nthreads)
@@ -37,32 +60,39 @@ mask_negligible_residual(ImageBuf& albedo, const ImageBuf& residual,
     // Half floats carry 11 bits: a residue of several rounded passes stays
     // below about 2^-9 of the beauty.
     constexpr float kNegligible = 1.0f / 512.0f;
-    ImageSpec spec(albedo.roi(), TypeFloat);
-    spec.nchannels = 1;
-    spec.channelnames = { "Y" };
-    ImageBuf real(spec), near_real;
+    const ROI all = albedo.roi();
+    const int w = all.width(), h = all.height();
+    std::vector<uint8_t> real(size_t(w) * size_t(h)), rows(real.size()),
+        near_real(real.size());
     ImageBufAlgo::parallel_image(
-        albedo.roi(), paropt(nthreads), [&](ROI roi) {
+        all, paropt(nthreads), [&](ROI roi) {
             roi.chbegin = 0;
             roi.chend   = 3;
             ImageBuf::ConstIterator<float> r(residual, roi), b(beauty, roi);
-            ImageBuf::Iterator<float> m(real, roi);
-            for (; !m.done(); ++m, ++r, ++b) {
+            for (; !r.done(); ++r, ++b) {
                 float res = 0.0f, total = 0.0f;
                 for (int c = 0; c < 3; ++c) {
                     res   = std::max(res, std::fabs(r[c]));
                     total = std::max(total, std::fabs(b[c]));
                 }
-                m[0] = res > kNegligible * total ? 1.0f : 0.0f;
+                real[size_t(r.y() - all.ybegin) * size_t(w) + size_t(r.x() - all.xbegin)]
+                    = res > kNegligible * total;
             }
         });
-    ImageBufAlgo::dilate(near_real, real, 2 * reach + 1, 2 * reach + 1, {},
-                         nthreads);
+    // Near a real residual: within `reach` in x and in y (a square),
+    // rows then columns.
+    parallel_for(int64_t(0), int64_t(h), [&](int64_t y) {
+        const size_t row = size_t(y) * size_t(w);
+        any_within(&real[row], &rows[row], w, 1, reach);
+    }, detail::paropt_any_length(nthreads));
+    parallel_for(int64_t(0), int64_t(w), [&](int64_t x) {
+        any_within(&rows[size_t(x)], &near_real[size_t(x)], h, size_t(w), reach);
+    }, detail::paropt_any_length(nthreads));
     ImageBufAlgo::parallel_image(
-        albedo.roi(), paropt(nthreads), [&](ROI roi) {
-            ImageBuf::ConstIterator<float> m(near_real, roi);
-            for (ImageBuf::Iterator<float> a(albedo, roi); !a.done(); ++a, ++m)
-                if (!(m[0] > 0.0f))
+        all, paropt(nthreads), [&](ROI roi) {
+            for (ImageBuf::Iterator<float> a(albedo, roi); !a.done(); ++a)
+                if (!near_real[size_t(a.y() - all.ybegin) * size_t(w)
+                               + size_t(a.x() - all.xbegin)])
                     for (int c = roi.chbegin; c < roi.chend; ++c)
                         a[c] = 0.0f;
         });
