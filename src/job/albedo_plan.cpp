@@ -140,11 +140,11 @@ plan_layer_colours(const Job& j, InputFiles& files, LayersPlan& layers,
     }
     if (own.empty())
         return a;
-    std::string name = "--albedo-samples";
     if (j.no_albedo_prefilter) {
         log.push_back("  colours   not prefiltered (--no-albedo-prefilter)");
         return a;
     }
+    std::string name = "--albedo-samples";
     a.prefilter = j.albedo_samples > 0
                       ? j.albedo_samples
                       : cycles_samples(files, own.front()->albedo.front(), name);

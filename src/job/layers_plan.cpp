@@ -24,16 +24,6 @@ using OIIO::Strutil::fmt::format;
 
 namespace {
 
-/// Where the residual layer is negligible against the beauty in a whole
-/// neighbourhood, set its albedo to 0, so that the filter passes it through
-/// there. Beauty minus layers leaves a residue of the passes' half-float
-/// rounding wherever the residual is really empty; relative to its own
-/// (zero) level that residue is pure noise, and the filter would grow every
-/// window there to r_max for nothing (it made layered mode 5-10x slower than
-/// beauty mode). Pixels within `reach` of a real residual stay: an emitter's
-/// anti-aliased edge has pixels whose few coverage samples all missed it,
-/// and the filter gives them their share of its light. All three images
-/// are float.
 /// Whether any of the n elements within r of each element (the window
 /// clipped at both ends, `stride` apart) is set: a running count, so that
 /// its cost does not grow with r.
@@ -53,6 +43,16 @@ any_within(const uint8_t* in, uint8_t* out, int n, size_t stride, int r)
 }
 
 
+/// Where the residual layer is negligible against the beauty in a whole
+/// neighbourhood, set its albedo to 0, so that the filter passes it through
+/// there. Beauty minus layers leaves a residue of the passes' half-float
+/// rounding wherever the residual is really empty; relative to its own
+/// (zero) level that residue is pure noise, and the filter would grow every
+/// window there to r_max for nothing (it made layered mode 5-10x slower than
+/// beauty mode). Pixels within `reach` of a real residual stay: an emitter's
+/// anti-aliased edge has pixels whose few coverage samples all missed it,
+/// and the filter gives them their share of its light. All three images
+/// are float.
 void
 mask_negligible_residual(ImageBuf& albedo, const ImageBuf& residual,
                          const ImageBuf& beauty, int reach, int nthreads)
