@@ -408,6 +408,83 @@ TEST_F(LayersCli, CyclesLobeColoursArePrefilteredWithTheRendersSamples)
 }
 
 
+TEST_F(LayersCli, TextureSeenInAMirrorIsKept)
+{
+    // The right half is a mirror (no diffuse colour, a flat GlossCol 0.9)
+    // reflecting a finely textured wall; Cycles divides the reflected light
+    // by GlossCol, so the texture is in the quotient, while its Denoising
+    // Albedo passes through the mirror to the wall's texture. Where
+    // DiffCol is 0 the glossy lobe is divided by the Denoising Albedo
+    // instead (docs/LAYERS.md, "Mirrors and glass"), as beauty mode does.
+    synth::Scene wall = synth::fine_texture(W, H, { 8, 31 });
+    const int mirror_x = W / 2;
+    ImageBuf diff_col = wall.albedo, gloss_col = constant(0.0f), den = wall.albedo;
+    ImageBuf diff_z = cycles_divide(wall.noisy, wall.albedo), gloss_z = constant(0.0f);
+    ImageBuf beauty = wall.noisy, clean = wall.clean;
+    for (int y = 0; y < H; ++y)
+        for (int x = mirror_x; x < W; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const float tint = 0.9f;
+                auto set = [&](ImageBuf& img, float v) {
+                    float px[3];
+                    img.getpixel(x, y, px, 3);
+                    px[c] = v;
+                    img.setpixel(x, y, px, 3);
+                };
+                set(diff_col, 0.0f);
+                set(diff_z, 0.0f);
+                set(gloss_col, tint);
+                set(gloss_z, wall.noisy.getchannel(x, y, 0, c));
+                set(den, tint * wall.albedo.getchannel(x, y, 0, c));
+                set(beauty, tint * wall.noisy.getchannel(x, y, 0, c));
+                set(clean, tint * wall.clean.getchannel(x, y, 0, c));
+            }
+    const std::string P = "ViewLayer.";
+    ImageBuf alpha = constant(1.0f, 1), zero = constant(0.0f);
+    std::vector<Channel> ch;
+    add_rgb(ch, P + "Combined", beauty);
+    ch.push_back({ P + "Combined.A", &alpha, 0 });
+    add_rgb(ch, P + "Denoising Albedo", den);
+    add_rgb(ch, P + "DiffCol", diff_col);
+    add_rgb(ch, P + "DiffDir", diff_z);
+    add_rgb(ch, P + "DiffInd", zero);
+    add_rgb(ch, P + "GlossCol", gloss_col);
+    add_rgb(ch, P + "GlossDir", gloss_z);
+    add_rgb(ch, P + "GlossInd", zero);
+    add_rgb(ch, P + "Emit", zero);
+    add_rgb(ch, P + "Env", zero);
+    ImageBuf file = assemble(ch);
+    ASSERT_TRUE(file.write(path("mirror.exr"))) << file.geterror();
+
+    RunResult r = run("--in " + path("mirror.exr") + " -o " + path("through.exr")
+                      + " --mode layers -v");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("layer     ViewLayer.Gloss: over ViewLayer.Denoising Albedo.R,"
+                         "ViewLayer.Denoising Albedo.G,ViewLayer.Denoising Albedo.B where "
+                         "ViewLayer.DiffCol is 0 (mirrors, clear glass)"),
+              std::string::npos)
+        << r.out;
+    // The same lobes given with --layer: divided by GlossCol everywhere.
+    r = run("--in " + path("mirror.exr") + " -o " + path("flat.exr")
+            + " --layer diffuse=DiffDir+DiffInd:DiffCol:divided"
+              " --layer glossy=GlossDir+GlossInd:GlossCol:divided:reflected");
+    ASSERT_EQ(r.status, 0) << r.err;
+    ImageBuf through(path("through.exr")), flat(path("flat.exr"));
+    ASSERT_TRUE(through.read(0, 0, true, TypeFloat)) << through.geterror();
+    ASSERT_TRUE(flat.read(0, 0, true, TypeFloat)) << flat.geterror();
+    const double noisy_err   = synth::rel_mse(beauty, clean, mirror_x, W, 0, H);
+    const double through_err = synth::rel_mse(through, clean, mirror_x, W, 0, H);
+    const double flat_err    = synth::rel_mse(flat, clean, mirror_x, W, 0, H);
+    std::printf("  mirror half: relMSE noisy %.5f, over GlossCol %.5f, over the Denoising "
+                "Albedo %.5f\n", noisy_err, flat_err, through_err);
+    EXPECT_LT(through_err * 2.0, flat_err) << "the texture seen in the mirror must be kept";
+    EXPECT_LT(through_err * 3.0, noisy_err);
+    // The diffuse half is not touched by it.
+    EXPECT_NEAR(synth::rel_mse(through, clean, 0, mirror_x - 4, 0, H),
+                synth::rel_mse(flat, clean, 0, mirror_x - 4, 0, H), 0.25 * noisy_err);
+}
+
+
 TEST_F(LayersCli, CyclesEnvironmentIsAddedAsItIs)
 {
     // The environment seen directly: a sharp, bright checker in the

@@ -160,6 +160,19 @@ plan_layers(InputFiles& files, const Job& j,
     }
     log.push_back(format("  layer     {}: {} with albedo {}", residual_layer,
                          shown_residual, shown_albedo));
+    // Only a convention's lobes (Cycles: Diff, Gloss, Trans), which name
+    // their lobe; --layer gives none.
+    const auto diffuse = std::find_if(args.begin(), args.end(),
+                                      [](const LayerArg& a) {
+                                          return a.lobe == "Diff";
+                                      });
+    for (size_t i = 0; diffuse != args.end() && i < args.size(); ++i)
+        if (args[i].divided && (args[i].lobe == "Gloss" || args[i].lobe == "Trans")) {
+            plan.layers[i].diffuse = int(diffuse - args.begin());
+            log.push_back(format("  layer     {}: over {} where {} is 0 (mirrors, "
+                                 "clear glass)", args[i].name, shown_albedo,
+                                 diffuse->albedo));
+        }
     return plan;
 }
 
@@ -210,6 +223,48 @@ prefilter_colour(const LayersPlan::One& one, const Job& j, ImageBuf& colour,
     clean.swap(one.divided ? remodulation : colour);
 }
 
+
+/// Mirrors and clear glass (docs/LAYERS.md, "Mirrors and glass"). Cycles
+/// divides a lobe's light by the lobe's colour, which at a mirror or clear
+/// glass is flat: the texture seen in it stays in the quotient, and the
+/// filter blurs it. Its Denoising Albedo passes through such a hit to the
+/// surface seen, as beauty mode's albedo does. So where a pixel has no
+/// diffuse colour (`diffuse_colour` 0 in every channel: no sample met a
+/// rough surface) and the lobe's `colour` is not 0, the lobe's light is
+/// divided by `through` instead: `radiance` (Cycles' quotient by `colour`)
+/// becomes `colour * radiance / through`, and `colour` (and the colour
+/// that remodulates, if any) `through`, channel by channel where `through`
+/// is above `eps`. Nothing else changes: remodulated, the light is the
+/// renderer's.
+void
+divide_through_specular(ImageBuf& radiance, ImageBuf& colour,
+                        ImageBuf& remodulation, const ImageBuf& diffuse_colour,
+                        const ImageBuf& through, float eps, int threads)
+{
+    const bool remodulates = remodulation.initialized();
+    ImageBufAlgo::parallel_image(radiance.roi(), threads, [&](ROI roi) {
+        ImageBuf::ConstIterator<float> d(diffuse_colour, roi), t(through, roi);
+        ImageBuf::Iterator<float> q(radiance, roi), c(colour, roi);
+        ImageBuf::Iterator<float> m(remodulates ? remodulation : colour, roi);
+        for (; !q.done(); ++q, ++c, ++m, ++d, ++t) {
+            if (!d.exists() || !t.exists() || !c.exists()
+                || d[0] != 0.0f || d[1] != 0.0f || d[2] != 0.0f
+                || !(c[0] > 0.0f || c[1] > 0.0f || c[2] > 0.0f)
+                || t[0] > 1.0f || t[1] > 1.0f || t[2] > 1.0f)
+                continue;
+            for (int ch = 0; ch < 3; ++ch) {
+                const float through_c = t[ch];
+                if (!(through_c > eps && std::isfinite(through_c)))
+                    continue;
+                q[ch] = c[ch] * q[ch] / through_c;
+                c[ch] = through_c;
+                if (remodulates)
+                    m[ch] = through_c;
+            }
+        }
+    });
+}
+
 }  // namespace
 
 
@@ -229,10 +284,12 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
     const size_t given = plan.residual_is_layer ? n - 1 : n;
     for (size_t i = 0; i < n; ++i) {
         const LayersPlan::One& one = plan.layers[i];
+        // divide_through_specular() writes a lobe's light and colour, and
+        // the mask below the residual layer's albedo: copies of their own.
+        const bool read_only = one.diffuse < 0;
         if (i < given)
-            l.radiance[i] = strip.sum(one.radiance);
-        // The residual layer's albedo is masked below: a copy of its own.
-        l.albedo[i]         = strip.sum(one.albedo, i < given);
+            l.radiance[i] = strip.sum(one.radiance, read_only);
+        l.albedo[i]         = strip.sum(one.albedo, i < given && read_only);
         if (one.prefilter)
             prefilter_colour(one, j, l.albedo[i], l.remodulation[i]);
         layers[i].name      = one.name;
@@ -287,6 +344,13 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
             fail(format("layers of '{}': {}", j.in.path,
                         one_line(l.radiance[i].geterror())));
     }
+    for (size_t k = 0; k < given; ++k)
+        if (plan.layers[k].diffuse >= 0)
+            divide_through_specular(l.radiance[k], l.albedo[k],
+                                    l.remodulation[k],
+                                    l.albedo[size_t(plan.layers[k].diffuse)],
+                                    l.albedo[i], j.filter.albedo_eps,
+                                    j.threads);
     // The mask reads float images; the beauty may be the file's half rows.
     const ImageBuf beauty_float = beauty.spec().format == TypeFloat
                                       ? ImageBuf()

@@ -36,6 +36,14 @@ struct LayersPlan {
         /// Samples a pixel of its colour, the render's own AOV, which
         /// load_layers() prefilters (plan_layer_colours()); 0: as it is.
         int prefilter = 0;
+        /// A Cycles glossy or transmission lobe beside the diffuse lobe
+        /// `diffuse` (its index in `layers`) and the residual layer: where
+        /// the diffuse colour is 0 and this lobe's is not, the first hit is
+        /// a mirror or clear glass, and the residual's albedo (Cycles'
+        /// Denoising Albedo, which passes through such a hit) is the albedo
+        /// of what is seen in it. load_layers() divides the lobe's light by
+        /// that there (divide_through_specular()). -1: not such a lobe.
+        int diffuse = -1;
     };
     std::vector<One> layers;  ///< the given ones, then the residual's
     /// The residual's terms; none: the beauty minus the given layers.
