@@ -234,8 +234,10 @@ prefilter_colour(const LayersPlan::One& one, const Job& j, ImageBuf& colour,
 /// divided by `through` instead: `radiance` (Cycles' quotient by `colour`)
 /// becomes `colour * radiance / through`, and `colour` (and the colour
 /// that remodulates, if any) `through`, channel by channel where `through`
-/// is above `eps`. Nothing else changes: remodulated, the light is the
-/// renderer's.
+/// is above `eps`; not where a channel of `through` is above 1, an emitter
+/// seen through the glass (Cycles writes its emission as its albedo),
+/// whose samples would be taken for texture. Nothing else changes:
+/// remodulated, the light is the renderer's.
 void
 divide_through_specular(ImageBuf& radiance, ImageBuf& colour,
                         ImageBuf& remodulation, const ImageBuf& diffuse_colour,
