@@ -116,6 +116,49 @@ coverage_variance(AlbedoPlanes& p, int samples, int nthreads)
 }
 
 
+/// The variance the halves `a` and `b` show (the mean over the 3x3 of
+/// (a - b)^2 / 4, finite values within the window), where it is above the
+/// model's: the larger of two estimates, so that noise the model does not
+/// know (texture finer than its 3x3) is not taken for texture.
+bool
+halves_variance(AlbedoPlanes& p, const ImageBuf& half_a,
+                const ImageBuf& half_b, int nthreads)
+{
+    std::vector<float> a(p.a.size()), b(p.a.size());
+    if (!half_a.get_pixels(p.win, TypeFloat, a.data())
+        || !half_b.get_pixels(p.win, TypeFloat, b.data()))
+        return false;
+    for (size_t i = 0; i < a.size(); ++i) {
+        const float d = a[i] - b[i];
+        a[i] = std::isfinite(d) ? 0.25f * d * d
+                                : std::numeric_limits<float>::quiet_NaN();
+    }
+    const ROI& w = p.win;
+    parallel_for(int64_t(w.ybegin), int64_t(w.yend), [&](int64_t y) {
+        for (int x = w.xbegin; x < w.xend; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const size_t i = 3 * p.index(x, int(y)) + size_t(c);
+                float sum = 0.0f;
+                int n     = 0;
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        if (!p.inside(x + dx, int(y) + dy))
+                            continue;
+                        const float h = a[3 * p.index(x + dx, int(y) + dy)
+                                          + size_t(c)];
+                        if (std::isfinite(h)) {
+                            sum += h;
+                            ++n;
+                        }
+                    }
+                if (n && std::isfinite(p.v[i]))
+                    p.v[i] = std::max(p.v[i], sum / float(n));
+            }
+    }, detail::paropt_any_length(nthreads));
+    return true;
+}
+
+
 /// Rows of a band of the output `roi`: the weighted sums of section 12
 /// over the 7x7 offsets, into acc and wsum (indexed as roi), and which
 /// pixels are filtered (those whose 3x3 mixes albedos).
@@ -222,13 +265,22 @@ albedo_prefilter_halo()
 }
 
 
+namespace {
+
 bool
-prefilter_albedo(ImageBuf& dst, const ImageBuf& albedo, int samples, ROI roi,
-                 int nthreads)
+prefilter(ImageBuf& dst, const ImageBuf& albedo, int samples,
+          const ImageBuf* half_a, const ImageBuf* half_b, ROI roi,
+          int nthreads)
 {
     const char* opname = "prefilter_albedo";
     if (!detail::prepare_dst(dst, albedo, roi, opname)
         || !detail::check_input(dst, albedo, opname, "albedo", roi, 3))
+        return false;
+    if (half_a
+        && (!detail::check_input(dst, *half_a, opname, "half_a",
+                                 albedo.roi(), 3)
+            || !detail::check_input(dst, *half_b, opname, "half_b",
+                                    albedo.roi(), 3)))
         return false;
     if (samples < 1) {
         dst.errorfmt("{}: samples = {} is invalid: needs >= 1", opname,
@@ -248,6 +300,10 @@ prefilter_albedo(ImageBuf& dst, const ImageBuf& albedo, int samples, ROI roi,
         if (!std::isfinite(a))
             a = std::numeric_limits<float>::quiet_NaN();
     coverage_variance(p, samples, nthreads);
+    if (half_a && !halves_variance(p, *half_a, *half_b, nthreads)) {
+        dst.errorfmt("{}: cannot read the halves' albedos", opname);
+        return false;
+    }
     for (int c = 0; c < 3; ++c) {
         p.planar_a[c].resize(p.a.size() / 3);
         p.planar_v[c].resize(p.a.size() / 3);
@@ -290,6 +346,26 @@ prefilter_albedo(ImageBuf& dst, const ImageBuf& albedo, int samples, ROI roi,
         return false;
     }
     return true;
+}
+
+
+}  // namespace
+
+
+bool
+prefilter_albedo(ImageBuf& dst, const ImageBuf& albedo, int samples, ROI roi,
+                 int nthreads)
+{
+    return prefilter(dst, albedo, samples, nullptr, nullptr, roi, nthreads);
+}
+
+
+bool
+prefilter_albedo(ImageBuf& dst, const ImageBuf& albedo, int samples,
+                 const ImageBuf& half_a, const ImageBuf& half_b, ROI roi,
+                 int nthreads)
+{
+    return prefilter(dst, albedo, samples, &half_a, &half_b, roi, nthreads);
 }
 
 

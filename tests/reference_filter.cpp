@@ -1205,7 +1205,8 @@ denoise(const RefImage& L, const RefImage& La, const RefGuides& guides,
 
 
 RefImage
-prefilter_albedo(const RefImage& A, int samples)
+prefilter_albedo(const RefImage& A, int samples, const RefImage* half_a,
+                 const RefImage* half_b)
 {
     // Section 12, in double, one pixel at a time.
     const int w = A.w, h = A.h;
@@ -1230,6 +1231,28 @@ prefilter_albedo(const RefImage& A, int samples)
                 const double t     = range > 1e-6 ? (A.at(x, y, c) - lo) / range : 0.0;
                 V.at(x, y, c) = float(range * range * t * (1.0 - t) / std::pow(samples, 1.5));
             }
+    // the halves' variance, the 3x3 mean of (a - b)^2 / 4 over finite
+    // values, where it is larger
+    if (half_a)
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    double sum = 0.0;
+                    int n      = 0;
+                    for (int dy = -1; dy <= 1; ++dy)
+                        for (int dx = -1; dx <= 1; ++dx) {
+                            if (!A.inside(x + dx, y + dy))
+                                continue;
+                            const double diff = double(half_a->at(x + dx, y + dy, c))
+                                                - half_b->at(x + dx, y + dy, c);
+                            if (std::isfinite(diff)) {
+                                sum += 0.25 * diff * diff;
+                                ++n;
+                            }
+                        }
+                    if (n && std::isfinite(V.at(x, y, c)))
+                        V.at(x, y, c) = std::max(V.at(x, y, c), float(sum / n));
+                }
     // d(p, q): mean over channels of ((A_p - A_q)^2 - (V_p + min(V_p, V_q)))
     // / (1e-10 + V_p + V_q); undefined (NaN) if a value is not finite
     auto d = [&](int px, int py, int qx, int qy) {

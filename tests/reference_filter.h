@@ -84,7 +84,11 @@ RefImage regression_filter(const RefImage& z, const RefImage& La,
 
 /// docs/FILTER.md section 12: the albedo prefilter of an albedo of
 /// `samples` samples a pixel (RGB filtered, other channels copied).
-RefImage prefilter_albedo(const RefImage& albedo, int samples);
+/// With the halves' albedos `half_a`, `half_b` (both given or neither), the
+/// variance is the larger of the model's and the 3x3 mean of (a - b)^2 / 4.
+RefImage prefilter_albedo(const RefImage& albedo, int samples,
+                          const RefImage* half_a = nullptr,
+                          const RefImage* half_b = nullptr);
 
 /// demodulate + regression_filter + remodulate.
 RefImage denoise(const RefImage& L, const RefImage& La, const RefGuides& guides,

@@ -178,6 +178,49 @@ TEST(AlbedoPrefilter, MatchesTheReference)
 }
 
 
+TEST(AlbedoPrefilter, HalvesMeasureTheNoiseTheModelCannotSee)
+{
+    // Two independent halves of 4 samples each of a speckled albedo (the
+    // rough metal's lobe choice, which stratifies less than the model
+    // assumes): their difference measures the noise, and the mean of the
+    // halves comes out cleaner with it than with the model alone.
+    RenderedAlbedo a = render_albedo(96, 64, 4, 21, speckle_at);
+    RenderedAlbedo b = render_albedo(96, 64, 4, 22, speckle_at);
+    ImageBuf mean = ImageBufAlgo::mul(ImageBufAlgo::add(a.noisy, b.noisy), 0.5f);
+    ImageBuf model = zdenoise::prefilter_albedo(mean, 8);
+    ImageBuf halves;
+    ASSERT_TRUE(zdenoise::prefilter_albedo(halves, mean, 8, a.noisy, b.noisy)) << halves.geterror();
+    const double before = synth::rel_mse(mean, a.exact);
+    const double with_model = synth::rel_mse(model, a.exact);
+    const double with_halves = synth::rel_mse(halves, a.exact);
+    std::printf("  speckle, 4+4 spp: albedo relMSE %.5f, model %.5f, halves %.5f\n", before,
+                with_model, with_halves);
+    EXPECT_LT(with_halves, 0.7 * with_model);
+    // Halves that agree add nothing to the model.
+    ImageBuf same;
+    ASSERT_TRUE(zdenoise::prefilter_albedo(same, mean, 8, mean, mean));
+    EXPECT_TRUE(synth::same_pixels(same, model));
+    // The reference agrees, a NaN in one half included.
+    a.noisy.setpixel(30, 30, std::vector<float> { NAN, 0.3f, 0.3f }.data());
+    ASSERT_TRUE(zdenoise::prefilter_albedo(halves, mean, 8, a.noisy, b.noisy));
+    const zdenoise_ref::RefImage ra = zdenoise_ref::from_imagebuf(a.noisy),
+                                 rb = zdenoise_ref::from_imagebuf(b.noisy);
+    const zdenoise_ref::RefImage ref
+        = zdenoise_ref::prefilter_albedo(zdenoise_ref::from_imagebuf(mean), 8, &ra, &rb);
+    const zdenoise_ref::RefImage got = zdenoise_ref::from_imagebuf(halves);
+    double worst = 0.0;
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 96; ++x)
+            for (int c = 0; c < 3; ++c)
+                worst = std::max(worst, double(std::abs(got.at(x, y, c) - ref.at(x, y, c))));
+    EXPECT_LT(worst, 1e-5);
+    // Halves that do not cover the albedo are refused, naming them.
+    ImageBuf small(ImageSpec(10, 10, 3, TypeFloat)), err;
+    EXPECT_FALSE(zdenoise::prefilter_albedo(err, mean, 8, small, b.noisy));
+    EXPECT_NE(err.geterror().find("half_a"), std::string::npos) << err.geterror();
+}
+
+
 TEST(AlbedoPrefilter, DoesNotDependOnThreadsOrOnComputingAPart)
 {
     RenderedAlbedo r = render_albedo(96, 64, 4, 14, text_at);
@@ -266,6 +309,36 @@ TEST_F(CliTest, CyclesAlbedoIsPrefilteredWithTheRendersSamples)
     for (int y = 0; y < 96; y += 7)
         for (int x = 0; x < 96; x += 5)
             ASSERT_EQ(pre.getchannel(x, y, 0, alb), noisy.getchannel(x, y, 0, alb));
+}
+
+
+TEST_F(CliTest, CyclesHalvesMeasureTheAlbedosNoise)
+{
+    // With --halves of Cycles files, the prefilter also takes the albedo's
+    // variance from the halves' own Denoising Albedo (docs/FILTER.md 12).
+    // Here both halves are the bundled crop: they agree, so the model
+    // alone decides, and the output is the one the model gives.
+    const std::string in = kSourceDir + "/share/samples/cornell_textured_spp16_crop.exr";
+    RunResult r = run("--in '" + in + "' --halves '" + in + "' '" + in + "' -o '"
+                      + path("halves.exr") + "' -v");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("albedo    its noise also measured from the halves' albedos "
+                         "(ViewLayer.Denoising Albedo)"),
+              std::string::npos)
+        << r.out;
+    ImageBuf out(path("halves.exr"));
+    ASSERT_TRUE(out.read(0, 0, true, TypeFloat)) << out.geterror();
+    EXPECT_NE(out.spec().get_string_attribute("zdenoise.parameters")
+                  .find("albedo-samples=16 albedo-halves"),
+              std::string::npos);
+    // Halves without an albedo of their own: the model alone, said so by
+    // the absence of the line.
+    ImageBuf rgb = ImageBufAlgo::channels(ImageBuf(in), 3, { 0, 1, 2 });
+    ASSERT_TRUE(rgb.write(path("rgb.exr")));
+    r = run("--in '" + in + "' --halves '" + path("rgb.exr") + "' '" + path("rgb.exr")
+            + "' -o '" + path("plain.exr") + "' -v");
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(r.out.find("measured from the halves"), std::string::npos) << r.out;
 }
 
 

@@ -388,6 +388,19 @@ ZDENOISE_API bool prefilter_albedo(ImageBuf& dst, const ImageBuf& albedo,
 ZDENOISE_API ImageBuf prefilter_albedo(const ImageBuf& albedo, int samples,
                                        ROI roi = {}, int nthreads = 0);
 
+/// The same for an albedo that is the mean of two independent halves of
+/// the render, whose own albedos are `half_a` and `half_b` (channels 0-2,
+/// over at least `albedo`'s data window): the variance of each value is the
+/// larger of the model's above and the halves' own, the mean over the 3x3
+/// (finite values within the window) of (a - b)^2 / 4 (NFOR's feature
+/// variance). The halves see noise the model cannot: texture finer than a
+/// pixel's 3x3, the speckle of glossy first hits. `samples` is the mean's
+/// (both halves' together).
+ZDENOISE_API bool prefilter_albedo(ImageBuf& dst, const ImageBuf& albedo,
+                                   int samples, const ImageBuf& half_a,
+                                   const ImageBuf& half_b, ROI roi = {},
+                                   int nthreads = 0);
+
 /// How far a pixel of prefilter_albedo() looks: 5 pixels.
 ZDENOISE_API int albedo_prefilter_halo();
 

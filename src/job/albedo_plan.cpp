@@ -55,8 +55,37 @@ AlbedoPlan::describe() const
         s += format(" aux-pooled={}/{}", pool_options.render_samples,
                     pool_options.aux_samples);
     if (prefilter)
-        s += format(" albedo-samples={}", prefilter);
+        s += format(" albedo-samples={}{}", prefilter,
+                    halves ? " albedo-halves" : "");
     return s;
+}
+
+
+/// With --halves whose files have an albedo of their own (Cycles' Denoising
+/// Albedo), the prefilter of the --in file's albedo takes its variance from
+/// them as well (prefilter_albedo(), docs/FILTER.md section 12): measured
+/// where the model only guesses.
+void
+use_halves_albedos(const Job& j, InputFiles& files, RoleSelections& roles,
+                   const ROI& noisy, AlbedoPlan& a,
+                   std::vector<std::string>& log)
+{
+    if (!a.prefilter || !roles.half_a.used || roles.albedo.path != j.in.path)
+        return;
+    const std::string named_a
+        = detect_convention(files.header(j.half_a.path).channelnames).albedo;
+    const std::string named_b
+        = detect_convention(files.header(j.half_b.path).channelnames).albedo;
+    if (named_a.empty() || named_b.empty())
+        return;
+    roles.half_a_albedo.selection = select_role(
+        files, { j.half_a.path, named_a, true }, Role::Albedo, &noisy, j.in.path);
+    roles.half_b_albedo.selection = select_role(
+        files, { j.half_b.path, named_b, true }, Role::Albedo, &noisy, j.in.path);
+    roles.half_a_albedo.used = roles.half_b_albedo.used = true;
+    a.halves = true;
+    log.push_back("  albedo    its noise also measured from the halves' albedos "
+                  "(" + named_a + ")");
 }
 
 
@@ -107,6 +136,7 @@ plan_albedo(const Job& j, InputFiles& files, const Convention& conv,
                              "(--albedo-samples)",
                              j.albedo_samples));
         a.prefilter = j.albedo_samples;
+        use_halves_albedos(j, files, roles, noisy, a, log);
         return a;
     }
     if (j.aux.given || roles.albedo.path != j.in.path)
@@ -119,6 +149,7 @@ plan_albedo(const Job& j, InputFiles& files, const Convention& conv,
                       : std::string("  albedo    not prefiltered: its samples "
                                     "per pixel are not in the file (give "
                                     "--albedo-samples N)"));
+    use_halves_albedos(j, files, roles, noisy, a, log);
     return a;
 }
 
@@ -166,6 +197,7 @@ plan_layer_colours(const Job& j, InputFiles& files, LayersPlan& layers,
 
 void
 make_albedo(const AlbedoPlan& a, ImageBuf& albedo, ImageBuf& own,
+            const ImageBuf& half_a, const ImageBuf& half_b,
             const ROI& region, const ROI& core,
             int threads, AuxAlbedoStats& totals, const std::string& path)
 {
@@ -173,7 +205,9 @@ make_albedo(const AlbedoPlan& a, ImageBuf& albedo, ImageBuf& own,
         if (!samples)
             return;
         ImageBuf clean;
-        if (!prefilter_albedo(clean, img, samples, region, threads))
+        if (!(a.halves ? prefilter_albedo(clean, img, samples, half_a, half_b,
+                                          region, threads)
+                       : prefilter_albedo(clean, img, samples, region, threads)))
             fail(format("'{}': {}", path, one_line(clean.geterror())));
         img = std::move(clean);
     };

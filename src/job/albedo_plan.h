@@ -29,6 +29,9 @@ struct AlbedoPlan {
     /// The albedo (the auxiliary one) is pooled with the render's own
     /// (RoleSelections::own_albedo) by pool_aux_albedo().
     bool pool = false;
+    /// The prefilter's variance also from the halves' albedos
+    /// (RoleSelections::half_a_albedo, half_b_albedo).
+    bool halves = false;
     AuxAlbedoOptions pool_options;
 
     /// Rows of the albedo read beyond what the filter reads.
@@ -63,12 +66,14 @@ plan_layer_colours(const Job& j, InputFiles& files, LayersPlan& layers,
                    std::vector<std::string>& log);
 
 /// The strip's albedo by plan `a`, over `region` (what the filter reads):
-/// `albedo` pooled with `own` (which is then freed), then prefiltered.
-/// The pixels rejected among `core` are added to `totals`. Fails naming
-/// `path` (the albedo's file).
+/// `albedo` pooled with `own` (which is then freed), then prefiltered (with
+/// the halves' albedos `half_a`, `half_b` when `a.halves`). The pixels
+/// rejected among `core` are added to `totals`. Fails naming `path` (the
+/// albedo's file).
 void
 make_albedo(const AlbedoPlan& a, OIIO::ImageBuf& albedo,
-            OIIO::ImageBuf& own, const OIIO::ROI& region,
+            OIIO::ImageBuf& own, const OIIO::ImageBuf& half_a,
+            const OIIO::ImageBuf& half_b, const OIIO::ROI& region,
             const OIIO::ROI& core, int threads, AuxAlbedoStats& totals,
             const std::string& path);
 

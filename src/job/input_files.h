@@ -113,12 +113,17 @@ struct RoleSelections {
     OptionalRole own_albedo { "own albedo", Role::Albedo, false, {} };
     /// Motion vectors, with --temporal (docs/TEMPORAL.md).
     OptionalRole motion { "motion", Role::Motion, false, {} };
+    /// The halves' own albedos, whose difference is the prefilter's
+    /// variance of the --in file's albedo (plan_albedo()).
+    OptionalRole half_a_albedo { "half A albedo", Role::Albedo, false, {} };
+    OptionalRole half_b_albedo { "half B albedo", Role::Albedo, false, {} };
 
     /// The optional roles, in the order -v lists them.
     std::vector<const OptionalRole*> optional() const
     {
         return { &normal, &depth, &id, &variance, &half_a, &half_b,
-                 &remodulation, &own_albedo, &motion };
+                 &remodulation, &own_albedo, &motion, &half_a_albedo,
+                 &half_b_albedo };
     }
 };
 

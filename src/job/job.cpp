@@ -326,17 +326,21 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
     if (roles.own_albedo.used)
         img.own_albedo = strip.image(roles.own_albedo.selection,
                                      p.radiance_as_is);
+    ImageBuf half_a_albedo = read(roles.half_a_albedo),
+             half_b_albedo = read(roles.half_b_albedo);
     convert_role(p, img.radiance, p.spaces.input, p.spaces.working, j.in);
     convert_role(p, img.albedo, p.spaces.albedo, p.spaces.working, j.albedo);
     convert_role(p, img.remodulation, p.spaces.albedo, p.spaces.working, j.aux);
     convert_role(p, img.own_albedo, p.spaces.input, p.spaces.working, j.in);
     convert_role(p, img.half_a, p.spaces.input, p.spaces.working, j.half_a);
     convert_role(p, img.half_b, p.spaces.input, p.spaces.working, j.half_b);
+    convert_role(p, half_a_albedo, p.spaces.albedo, p.spaces.working, j.half_a);
+    convert_role(p, half_b_albedo, p.spaces.albedo, p.spaces.working, j.half_b);
     // Over what the filter reads: the strip and its halo (and with
     // --temporal, the light test's box around it).
     if (!p.layered)  // the layers' colours: load_layers()
-        make_albedo(p.albedo, img.albedo, img.own_albedo,
-                    strip.widened(filter_halo(j.filter) + temporal_reach(j)),
+        make_albedo(p.albedo, img.albedo, img.own_albedo, half_a_albedo,
+                    half_b_albedo, strip.widened(filter_halo(j.filter) + temporal_reach(j)),
                     strip.core, j.threads, p.pooled, j.albedo.path);
     if (j.temporal > 0)
         combine_neighbours(j, p, files, strip, img, result);
