@@ -188,7 +188,9 @@ options()
         { Kind::Input, "--variance", "variance", FIELD(job.variance), "FILE",
           "Per-pixel variance of the radiance (1 or 3 channels)." },
         not_in_file_name({ Kind::Halves, "--halves", "halves", {}, "A B",
-          "Two independent half renders (radiance = (A+B)/2)." }),
+          "Two independent half renders (radiance = (A+B)/2).\n"
+          "Their own albedos, when the files have them (Cycles'\n"
+          "Denoising Albedo), also measure the albedo's noise." }),
         { Kind::Whole, "--albedo-samples", "albedo-samples", FIELD(job.albedo_samples), "N",
           "Samples per pixel of the render's albedo (--mode layers:\n"
           "of its lobe colours), which is prefiltered where it is\n"
