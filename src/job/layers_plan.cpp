@@ -244,8 +244,27 @@ divide_through_specular(ImageBuf& radiance, ImageBuf& colour,
                         const ImageBuf& through, float eps, int threads)
 {
     const bool remodulates = remodulation.initialized();
+    // The float iterators need float pixels; an image may be the file's
+    // half rows (the diffuse colour, an --aux colour).
+    auto make_float = [](ImageBuf& img) {
+        if (img.initialized() && img.spec().format != TypeFloat) {
+            ImageBuf copy = img.copy(TypeFloat);
+            img.swap(copy);  // not a move: see prefilter_colour()
+        }
+    };
+    make_float(radiance);
+    make_float(colour);
+    make_float(remodulation);
+    ImageBuf diffuse = diffuse_colour.spec().format == TypeFloat
+                           ? ImageBuf()
+                           : diffuse_colour.copy(TypeFloat);
+    ImageBuf through_float = through.spec().format == TypeFloat
+                                 ? ImageBuf()
+                                 : through.copy(TypeFloat);
+    const ImageBuf& d_img = diffuse.initialized() ? diffuse : diffuse_colour;
+    const ImageBuf& t_img = through_float.initialized() ? through_float : through;
     ImageBufAlgo::parallel_image(radiance.roi(), threads, [&](ROI roi) {
-        ImageBuf::ConstIterator<float> d(diffuse_colour, roi), t(through, roi);
+        ImageBuf::ConstIterator<float> d(d_img, roi), t(t_img, roi);
         ImageBuf::Iterator<float> q(radiance, roi), c(colour, roi);
         ImageBuf::Iterator<float> m(remodulates ? remodulation : colour, roi);
         for (; !q.done(); ++q, ++c, ++m, ++d, ++t) {
