@@ -49,6 +49,53 @@ clamp_negative(ImageBuf& img, ROI roi, int nthreads)
 }
 
 
+/// A direct layer's structure (keep_structure()): `filtered` (over roi
+/// widened by 1) takes, in roi, the significance filter of `light` where it
+/// smoothed more than the noise; counted in stats.
+bool
+keep_direct_structure(ImageBuf& filtered, const ImageBuf& light,
+                      const Guides& guides, const ROI& frame,
+                      FilterStats* stats, ROI roi, int nthreads)
+{
+    int64_t kept = 0;
+    if (!keep_structure(filtered, light, filtered, guides, frame, &kept, roi,
+                        nthreads))
+        return false;
+    if (stats)
+        stats->kept_pixels += kept;
+    return true;
+}
+
+
+/// keep_direct_structure() on a layer of radiance: the test and the
+/// significance filter see its light (the radiance over its albedo, as the
+/// regression filter does), so that texture is not taken for structure;
+/// `denoised` (over roi widened by 1) is remodulated in roi.
+bool
+keep_radiance_structure(ImageBuf& denoised, const ImageBuf& radiance,
+                        const ImageBuf& albedo, const Guides& guides,
+                        const FilterOptions& options, FilterStats* stats,
+                        ROI roi, int nthreads)
+{
+    const ROI around = detail::halo_region(roi, options.frame,
+                                           significance_halo() + 1);
+    ImageBuf light, smoothed;
+    if (!demodulate(light, radiance, albedo, options.albedo_eps, around,
+                    nthreads)
+        || !demodulate(smoothed, denoised, albedo, options.albedo_eps,
+                       denoised.roi(), nthreads)
+        || !keep_direct_structure(smoothed, light, guides, options.frame,
+                                  stats, roi, nthreads)
+        || !remodulate(denoised, smoothed, albedo, options.albedo_eps, roi,
+                       nthreads)) {
+        denoised.errorfmt("{}", light.has_error() ? light.geterror()
+                                                  : smoothed.geterror());
+        return false;
+    }
+    return true;
+}
+
+
 /// One layer's denoised radiance in roi, into `out`; `contribution` is set
 /// to the image holding it (`out`, or the radiance itself when nothing is
 /// to be done).
@@ -63,14 +110,23 @@ denoise_layer(ImageBuf& dst, const Layer& layer, const Guides& shared,
         options.edge_k *= kReflectedEdgeScale;
     contribution = &out;
     bool ok             = true;
+    // A direct layer is filtered one pixel beyond roi: keep_structure()'s
+    // test at roi's border reads it.
+    const bool direct   = layer.direct && layer.filter;
+    const ROI filtered_roi = direct ? detail::halo_region(roi, options.frame, 1)
+                                    : roi;
     if (!layer.divided) {
         if (!layer.filter) {
             contribution = layer.radiance;
             return true;
         }
         ok = denoise(out, *layer.radiance, *layer.albedo,
-                     layer.remodulation_albedo, guides, options, stats, roi,
-                     nthreads)
+                     layer.remodulation_albedo, guides, options, stats,
+                     filtered_roi, nthreads)
+             && (!direct
+                 || keep_radiance_structure(out, *layer.radiance,
+                                            *layer.albedo, guides, options,
+                                            stats, roi, nthreads))
              && clamp_negative(out, roi, nthreads);
     } else {
         // Already the quotient: filter it as it is, then compose it as the
@@ -80,7 +136,12 @@ denoise_layer(ImageBuf& dst, const Layer& layer, const Guides& shared,
         ImageBuf filtered;
         if (layer.filter) {
             if (!regression_filter(filtered, *layer.radiance, *layer.albedo,
-                                   guides, options, stats, roi, nthreads)) {
+                                   guides, options, stats, filtered_roi,
+                                   nthreads)
+                || (direct
+                    && !keep_direct_structure(filtered, *layer.radiance,
+                                              guides, options.frame, stats,
+                                              roi, nthreads))) {
                 dst.errorfmt("layered_denoise: layer '{}': {}", layer.name,
                              filtered.geterror());
                 return false;
@@ -212,8 +273,13 @@ layered_denoise(ImageBuf& dst, const std::vector<Layer>& layers,
         opt.frame = image;
     if (!detail::check_frame(dst, opname, roi, opt.frame))
         return false;
+    const bool any_direct = std::any_of(layers.begin(), layers.end(),
+                                        [](const Layer& l) {
+                                            return l.direct && l.filter;
+                                        });
     ROI need = options.frame.defined()
-                   ? detail::halo_region(roi, opt.frame, filter_halo(opt))
+                   ? detail::halo_region(roi, opt.frame,
+                                         filter_halo(opt) + (any_direct ? 1 : 0))
                    : image;
     need.chbegin = 0;
     need.chend   = 3;

@@ -8,6 +8,7 @@
 // Cryptomatte into the id guide, and writes the output types asked for.
 
 #include <cmath>
+#include <initializer_list>
 #include <cstdio>
 #include <string>
 #include <utility>
@@ -168,6 +169,23 @@ add_rgb(std::vector<Channel>& chans, const std::string& layer, const ImageBuf& i
     for (int c = 0; comps[c]; ++c)
         chans.push_back({ (layer.empty() ? "" : layer + ".") + std::string(1, comps[c]),
                           &img, c });
+}
+
+/// `start` plus the RGB of each named layer of `out` (written by --aovs).
+ImageBuf
+aov_sum(const ImageBuf& out, std::initializer_list<const char*> names, ImageBuf start)
+{
+    const ImageSpec& s = out.spec();
+    for (const char* layer : names) {
+        const int c = s.channelindex(std::string(layer) + ".R");
+        EXPECT_GE(c, 0) << "--aovs must write " << layer;
+        if (c < 0)
+            continue;
+        ImageBuf l;
+        ImageBufAlgo::channels(l, out, 3, { c, c + 1, c + 2 });
+        start = ImageBufAlgo::add(start, l);
+    }
+    return start;
 }
 
 }  // namespace
@@ -516,16 +534,50 @@ TEST_F(LayersCli, CyclesEnvironmentIsAddedAsItIs)
     ImageBuf out(path("out.exr"));
     ASSERT_TRUE(out.read(0, 0, true, TypeFloat)) << out.geterror();
     const ImageSpec& s = out.spec();
-    ImageBuf sum = env;
-    for (const char* layer : { "ViewLayer.Diff", "ViewLayer.Gloss", "ViewLayer.Residual" }) {
-        const int c = s.channelindex(std::string(layer) + ".R");
-        ASSERT_GE(c, 0) << "--aovs must write " << layer;
-        ImageBuf l;
-        ImageBufAlgo::channels(l, out, 3, { c, c + 1, c + 2 });
-        sum = ImageBufAlgo::add(sum, l);
-    }
+    const ImageBuf sum
+        = aov_sum(out, { "ViewLayer.Diff", "ViewLayer.Gloss", "ViewLayer.Residual" }, env);
     EXPECT_LT(max_rel_diff(out, sum, s.channelindex("ViewLayer.Combined.R"), 0), 1e-5f)
         << "the output must be the denoised layers plus the environment exactly as rendered";
+}
+
+
+TEST_F(LayersCli, PathModeFiltersTheDirectLightApartAndAddsUp)
+{
+    LobeRender r;
+    const std::string in = write_cycles(r, "cycles_path.exr");
+    RunResult res = run("--in " + in + " -o " + path("out.exr") + " --mode path --aovs -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    for (const char* needle :
+         { "mode path: the direct light apart from the rest, 2 layer(s)",
+           "layer     ViewLayer.DiffDir: ViewLayer.DiffDir.R,ViewLayer.DiffDir.G,"
+           "ViewLayer.DiffDir.B with albedo ViewLayer.DiffCol",
+           "(direct: structure beyond its noise kept)",
+           "residual  ViewLayer.Env.R,ViewLayer.Env.G,ViewLayer.Env.B, not filtered",
+           "ViewLayer.Residual: the beauty minus the layers minus ViewLayer.Env" })
+        EXPECT_NE(res.out.find(needle), std::string::npos) << "-v lacks '" << needle << "':\n"
+                                                           << res.out;
+    ImageBuf out(path("out.exr"));
+    ASSERT_TRUE(out.read(0, 0, true, TypeFloat)) << out.geterror();
+    const ImageSpec& s = out.spec();
+    const ImageBuf sum
+        = aov_sum(out, { "ViewLayer.DiffDir", "ViewLayer.Residual" }, constant(0.0f));
+    EXPECT_LT(max_rel_diff(out, sum, s.channelindex("ViewLayer.Combined.R"), 0), 1e-5f)
+        << "the direct light and the rest must add up to the denoised beauty";
+    ImageBuf beauty;
+    const int combined = s.channelindex("ViewLayer.Combined.R");
+    ImageBufAlgo::channels(beauty, out, 3, { combined, combined + 1, combined + 2 });
+    EXPECT_LT(synth::rel_mse(beauty, r.clean) * 3.0, synth::rel_mse(r.beauty, r.clean));
+
+    // A Cycles file without the direct light apart is refused by name.
+    std::vector<Channel> ch;
+    add_rgb(ch, "ViewLayer.Combined", r.beauty);
+    add_rgb(ch, "ViewLayer.Denoising Albedo", r.denoising_albedo);
+    ImageBuf plain = assemble(ch);
+    ASSERT_TRUE(plain.write(path("plain.exr"))) << plain.geterror();
+    RunResult refused = run("--in " + path("plain.exr") + " -o " + path("bad.exr")
+                            + " --mode path");
+    expect_one_line_error(refused, "--mode path: '" + path("plain.exr")
+                                       + "' has no direct light pass apart");
 }
 
 

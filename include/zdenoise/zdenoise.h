@@ -219,6 +219,9 @@ struct FilterStats {
     int64_t passthrough_pixels = 0;  ///< pixels with >= 1 RGB channel passed through
     int64_t nonfinite_pixels = 0;    ///< pixels with a non-finite RGB value in
                                      ///< the input (repaired or set to 0)
+    int64_t kept_pixels = 0;         ///< pixels of a direct layer where
+                                     ///< keep_structure() took the
+                                     ///< significance filter
 
     /// Add the statistics of other pixels (another tile, strip or layer):
     /// counts add, and mean_radius is radius_sum / windows again, so the
@@ -233,6 +236,7 @@ struct FilterStats {
         radius_sum += other.radius_sum;
         passthrough_pixels += other.passthrough_pixels;
         nonfinite_pixels += other.nonfinite_pixels;
+        kept_pixels += other.kept_pixels;
         mean_radius = windows ? double(radius_sum) / double(windows) : 0.0;
         return *this;
     }
@@ -313,6 +317,68 @@ ZDENOISE_API ImageBuf regression_filter(const ImageBuf& quotient,
                                         const FilterOptions& options = {},
                                         FilterStats* stats = nullptr,
                                         ROI roi = {}, int nthreads = 0);
+
+/// The significance filter (docs/FILTER.md section 14), for light that the
+/// render computes with little noise and sharp structure (the direct light
+/// of a sun or a small lamp: hard and thin shadows): each pixel becomes the
+/// mean of the pixels within 5 px on its surface whose 3x3 neighbourhood a
+/// test at the pixels' noise cannot tell from its own (the mean over the
+/// nine pairs of (y_p - y_q)^2 / (V_p + V_q) below 1.5, about the 85 %
+/// quantile of chi-square with 9 degrees of freedom over 9; y the
+/// luminance) and whose noise is at most 4x its own. A neighbour that
+/// differs beyond its noise (the other side of a shadow line) is left out,
+/// so that structure the input shows is kept; a noise-free pixel (V = 0)
+/// is left exactly as it is. V is estimated from the image itself: the
+/// smallest, over four directions, of the 5x5 mean of squared second
+/// differences along that direction (a line or an edge along one direction
+/// leaves its second differences at the noise), calibrated on Gaussian
+/// noise.
+///
+/// @param dst     The filtered light, RGB float over roi.
+/// @param light   The light, channels 0-2 (a quotient, such as Cycles'
+///                DiffDir, or radiance); non-finite values are left out
+///                and passed through.
+/// @param guides  normal (neighbours within about 25 degrees) and
+///                object_id (channel 0 equal) keep surfaces apart; the
+///                other guides are not used.
+/// @param frame   The data window of the whole image when `light` holds
+///                only a part of it (as FilterOptions::frame); the inputs
+///                must then cover roi widened by significance_halo().
+///                Undefined: light's data window.
+ZDENOISE_API bool significance_filter(ImageBuf& dst, const ImageBuf& light,
+                                      const Guides& guides = {},
+                                      ROI frame = {}, ROI roi = {},
+                                      int nthreads = 0);
+ZDENOISE_API ImageBuf significance_filter(const ImageBuf& light,
+                                          const Guides& guides = {},
+                                          ROI frame = {}, ROI roi = {},
+                                          int nthreads = 0);
+
+/// Keep the structure a smoother removed (docs/FILTER.md section 14): where
+/// `smoothed` departs from `light` beyond the noise of light (the mean over
+/// the 3x3 of (y - y_smoothed)^2 / V above 2.41, the 99 % quantile of
+/// chi-square with 9 degrees of freedom over 9), the result is
+/// significance_filter()'s; elsewhere it is `smoothed`. Where V is 0 (no
+/// noise) and smoothed differs, that is `light` itself. Parameters as for
+/// significance_filter(); `smoothed` must cover roi widened by 1 (clipped
+/// to the frame): the test at roi's border reads it. If `kept` is not null,
+/// it receives the number of pixels of roi that took the significance
+/// filter.
+ZDENOISE_API bool keep_structure(ImageBuf& dst, const ImageBuf& light,
+                                 const ImageBuf& smoothed,
+                                 const Guides& guides = {}, ROI frame = {},
+                                 int64_t* kept = nullptr, ROI roi = {},
+                                 int nthreads = 0);
+ZDENOISE_API ImageBuf keep_structure(const ImageBuf& light,
+                                     const ImageBuf& smoothed,
+                                     const Guides& guides = {},
+                                     ROI frame = {}, int64_t* kept = nullptr,
+                                     ROI roi = {}, int nthreads = 0);
+
+/// How far an output pixel of significance_filter() and keep_structure()
+/// looks: the 5-px search, its 3x3 test and the noise estimate's 5x5 of
+/// second differences.
+ZDENOISE_API int significance_halo();
 
 /// The whole method: demodulate, regression_filter, remodulate.
 /// Parameters as for those three operations.
@@ -489,6 +555,14 @@ struct Layer {
     /// Guides of this layer (e.g. the normals seen through a mirror); each
     /// member given here replaces the shared guide of the same kind.
     Guides guides;
+    /// The layer is direct light (Cycles' DiffDir): light the renderer
+    /// computes with little noise and sharp structure (hard and thin
+    /// shadows). After the regression filter, keep_structure() gives back
+    /// what it smoothed beyond the layer's noise (docs/FILTER.md section
+    /// 14, docs/LAYERS.md "Light by path"). With a direct layer, the
+    /// images must cover one more pixel around roi than filter_halo() says
+    /// (keep_structure()'s 3x3 test).
+    bool direct = false;
     /// If not null, a cleaner image of the layer's albedo (the lobe colour
     /// of a deterministic auxiliary render, docs/AUX.md) that remodulates
     /// the filtered layer in place of `albedo`, which still demodulates

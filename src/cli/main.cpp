@@ -354,6 +354,10 @@ run(int argc, char* argv[])
                100.0 * stats.passthrough_pixels / n,
                (long long)stats.passthrough_pixels,
                (long long)stats.nonfinite_pixels);
+        if (stats.kept_pixels)
+            printf("zdenoise: direct light: the significance filter kept "
+                   "structure at %lld pixels\n",
+                   (long long)stats.kept_pixels);
         printf("zdenoise: read %.2fs, denoise %.2fs, write %.2fs, total "
                "%.2fs -> '%s'\n",
                result.read_seconds, result.denoise_seconds,

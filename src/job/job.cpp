@@ -53,9 +53,12 @@ log_mode(const Job& j, const Convention& conv, const Plan& p,
     const bool noise_given = p.roles.variance.used || p.roles.half_a.used;
     if (p.layered) {
         log.insert(log.begin() + long(mode_line),
-                   format("mode layers: {} layer(s){}",
-                          p.layers.layers.size(),
-                          j.layers.empty() ? "" : " (--layer)"));
+                   p.path ? format("mode path: the direct light apart from "
+                                   "the rest, {} layer(s)",
+                                   p.layers.layers.size())
+                          : format("mode layers: {} layer(s){}",
+                                   p.layers.layers.size(),
+                                   j.layers.empty() ? "" : " (--layer)"));
         log.push_back(noise_given
                           ? "  noise     estimated per layer (--variance and "
                             "--halves describe the beauty, not a layer)"
@@ -90,13 +93,21 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
         apply_aux(j, files, aux, remodulation, result.log);
     apply_defaults(j, conv, result.log);
     apply_file_defaults(j, files);
-    const std::vector<LayerArg>& layer_args = j.layers.empty() ? conv.layers
-                                                               : j.layers;
+    if (j.mode == Mode::Path && conv.direct_layers.empty())
+        fail(format("--mode path: '{}' has no direct light pass apart (Cycles' "
+                    "DiffDir with DiffCol and Denoising Albedo; docs/LAYERS.md)",
+                    j.in.path));
+    // Not yet the default: measured worse than beauty mode on two of the
+    // public scenes (docs/LAYERS.md "Light by path").
+    p.path = j.mode == Mode::Path;
+    const std::vector<LayerArg>& layer_args
+        = p.path ? conv.direct_layers
+                 : (j.layers.empty() ? conv.layers : j.layers);
     if (j.mode == Mode::Layers && layer_args.empty())
         fail(format("--mode layers: no layers found in '{}' (see "
                     "docs/LAYERS.md); give them with --layer",
                     j.in.path));
-    p.layered = j.mode == Mode::Layers
+    p.layered = p.path || j.mode == Mode::Layers
                 || (j.mode == Mode::Auto && !j.layers.empty());
     if (!p.layered && !j.albedo.given)
         fail(format("no albedo: '{}' has no Denoising Albedo pass; give "
@@ -197,7 +208,9 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
         colour::tag_colour_space(spec, p.spaces.output, p.spaces.input);
     spec.attribute("zdenoise.version", ZDENOISE_VERSION_STRING);
     std::string parameters = describe(j.filter)
-                             + (p.layered ? " mode=layers" : " mode=beauty");
+                             + (p.path      ? " mode=path"
+                                : p.layered ? " mode=layers"
+                                            : " mode=beauty");
     parameters += p.albedo.describe();
     spec.attribute("zdenoise.parameters", parameters);
 
@@ -205,7 +218,8 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
     StripCost cost;
     cost.width  = p.noisy.width();
     cost.height = p.noisy.height();
-    cost.halo   = filter_halo(j.filter);
+    // A direct layer's keep_structure() reads one pixel beyond the strip.
+    cost.halo   = filter_halo(j.filter) + (p.path ? 1 : 0);
     // The residual layer's mask looks further than the filter.
     cost.around = cost.halo + p.layers.reach
                   + p.albedo.halo();

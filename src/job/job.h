@@ -44,7 +44,7 @@ struct InputArg {
 /// Auto: layers when --layer gives them, else beauty (measured on the
 /// public benchmark, docs/LAYERS.md: layers win on cornell_textured but
 /// lose slightly on newspaper and zigzag_steps).
-enum class Mode { Auto, Beauty, Layers };
+enum class Mode { Auto, Beauty, Layers, Path };
 
 /// What the render's radiance is divided by when an auxiliary image
 /// (--aux) is given: the render's own albedo (sharing the radiance's

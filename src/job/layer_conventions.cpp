@@ -116,6 +116,14 @@ cycles_convention(const std::vector<std::string>& names,
             c.layers.push_back({ prefix + lobe, lighting, colour, true,
                                  std::string(lobe) != "Diff", lobe });
     }
+    // Light by path: the diffuse direct light (a sun's or a small lamp's
+    // hard and thin shadows) apart; the glossy and transmitted light stay
+    // with the indirect light in the residual layer, as in beauty mode.
+    const std::string diff_dir = pass("DiffDir", "RGB");
+    const std::string diff_col = pass("DiffCol", "RGB");
+    if (!diff_dir.empty() && !diff_col.empty() && !c.albedo.empty())
+        c.direct_layers.push_back({ prefix + "DiffDir", diff_dir, diff_col,
+                                    true, false, "Diff", true });
     c.residual_albedo     = c.albedo;
     c.residual_layer      = prefix + "Residual";
     c.residual_unfiltered = pass("Env", "RGB");

@@ -33,6 +33,9 @@ struct LayerArg {
     /// Cycles file), which names its colour in an auxiliary image
     /// (AuxConvention::lobe_colours); empty for --layer.
     std::string lobe;
+    /// Direct light (zdenoise::Layer::direct): after the regression filter,
+    /// what it smoothed beyond the layer's noise is given back.
+    bool direct = false;
 };
 
 /// What a file's channel names say, by the first convention that matches.
@@ -46,6 +49,10 @@ struct Convention {
     /// channels), Arnold's motionvector (2).
     std::string motion;
     std::vector<LayerArg> layers;
+    /// The layers of light by path (--mode path, docs/LAYERS.md "Light by
+    /// path"): the direct light apart from the rest (Cycles: DiffDir over
+    /// DiffCol); empty when the file has no such pass.
+    std::vector<LayerArg> direct_layers;
     /// The residual selection ('+' joins sets); empty = the beauty minus the
     /// layers.
     std::string residual;

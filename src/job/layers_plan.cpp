@@ -121,16 +121,20 @@ plan_layers(InputFiles& files, const Job& j,
         one.name      = a.name;
         one.divided   = a.divided;
         one.reflected = a.reflected;
+        one.direct    = a.direct;
         one.radiance = select_sum(files, j.in.path, a.radiance, noisy,
                                   shown_radiance);
         one.albedo   = select_sum(files, j.in.path, a.albedo, noisy,
                                   shown_albedo);
         plan.layers.push_back(std::move(one));
-        log.push_back(format("  layer     {}: {} with albedo {}{}{}", a.name,
+        log.push_back(format("  layer     {}: {} with albedo {}{}{}{}", a.name,
                              shown_radiance, shown_albedo,
                              a.divided ? " (divided by it)" : "",
                              a.reflected ? " (reflected: stricter edge test)"
-                                         : ""));
+                                         : "",
+                             a.direct ? " (direct: structure beyond its noise "
+                                        "kept)"
+                                      : ""));
     }
     std::string shown_residual = "the beauty minus the layers";
     if (!residual.empty()) {
@@ -286,6 +290,31 @@ divide_through_specular(ImageBuf& radiance, ImageBuf& colour,
     });
 }
 
+
+/// A direct layer that came divided (Cycles' DiffDir) as the light it is,
+/// DiffDir * DiffCol, over the residual layer's albedo (the prefiltered
+/// Denoising Albedo, before its mask): the regression filter then sees it
+/// as beauty mode sees the beauty, which measured better than its quotient
+/// on the public set (docs/LAYERS.md "Light by path").
+void
+as_direct_radiance(Layer& layer, ImageBuf& radiance, ImageBuf& colour,
+                   ImageBuf& remodulation, const ImageBuf& residual_albedo,
+                   const Job& j)
+{
+    if (!layer.divided)
+        return;
+    ImageBuf light;
+    if (!ImageBufAlgo::mul(light, radiance, colour, {}, j.threads))
+        fail(format("layer '{}' of '{}': {}", layer.name, j.in.path,
+                    one_line(light.geterror())));
+    radiance.swap(light);
+    ImageBuf albedo = residual_albedo.copy(TypeFloat);
+    colour.swap(albedo);
+    remodulation.reset();
+    layer.remodulation_albedo = nullptr;
+    layer.divided             = false;
+}
+
 }  // namespace
 
 
@@ -322,6 +351,7 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
             layers[i].remodulation_albedo = &l.remodulation[i];
         layers[i].divided   = one.divided;
         layers[i].reflected = one.reflected;
+        layers[i].direct    = one.direct;
         layers[i].denoised  = &l.denoised[i];
         layers[i].stats     = &l.stats[i];
     }
@@ -372,6 +402,10 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
                                     l.albedo[size_t(plan.layers[k].diffuse)],
                                     l.albedo[i], j.filter.albedo_eps,
                                     j.threads);
+    for (size_t k = 0; k < given; ++k)
+        if (plan.layers[k].direct)
+            as_direct_radiance(layers[k], l.radiance[k], l.albedo[k],
+                               l.remodulation[k], l.albedo[i], j);
     // The mask reads float images; the beauty may be the file's half rows.
     const ImageBuf beauty_float = beauty.spec().format == TypeFloat
                                       ? ImageBuf()

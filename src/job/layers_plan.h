@@ -33,6 +33,8 @@ struct LayersPlan {
         /// A cleaner colour of the layer (the --aux file's), or none.
         std::vector<Selection> remodulation;
         bool divided = false, reflected = false;
+        /// Direct light (zdenoise::Layer::direct).
+        bool direct = false;
         /// Samples a pixel of its colour, the render's own AOV, which
         /// load_layers() prefilters (plan_layer_colours()); 0: as it is.
         int prefilter = 0;

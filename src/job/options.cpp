@@ -233,11 +233,15 @@ options()
           "Demodulation is per channel: use the renderer's\n"
           "rendering space." },
         { Kind::Mode, "--mode", "mode", FIELD(job.mode), "MODE",
+          "'path': the direct light (Cycles' DiffDir) and the rest\n"
+          "apart, the direct light's structure beyond its noise\n"
+          "kept (hard and thin shadows);\n"
           "'layers': denoise each layer (lobe or specular depth)\n"
           "with its own albedo, add the residual;\n"
           "'beauty': denoise the beauty with the albedo. Default:\n"
-          "layers when --layer is given, else beauty (layers are\n"
-          "better where lobe passes exist; docs/LAYERS.md)." },
+          "layers when --layer is given, else beauty. Each is\n"
+          "better on some scenes and worse on others; measured in\n"
+          "docs/LAYERS.md." },
         not_in_file_name({ Kind::Layers, "--layer", "layers", FIELD(job.layers), "NAME=RADIANCE:ALBEDO[:divided][:reflected]",
           "A layer of the --in file (repeatable; replaces the\n"
           "detected layers). RADIANCE and ALBEDO are channel\n"
@@ -459,6 +463,8 @@ parse_mode(const std::string& text, Mode& mode)
         mode = Mode::Beauty;
     else if (text == "layers")
         mode = Mode::Layers;
+    else if (text == "path")
+        mode = Mode::Path;
     else
         return false;
     return true;
@@ -468,7 +474,10 @@ parse_mode(const std::string& text, Mode& mode)
 const char*
 mode_name(Mode mode)
 {
-    return mode == Mode::Beauty ? "beauty" : mode == Mode::Layers ? "layers" : "";
+    return mode == Mode::Beauty   ? "beauty"
+           : mode == Mode::Layers ? "layers"
+           : mode == Mode::Path   ? "path"
+                                  : "";
 }
 
 

@@ -30,6 +30,9 @@ namespace job {
 /// Everything decided before the first pixel is read.
 struct Plan {
     bool layered = false;
+    /// Light by path (--mode path, or its default): layered, with the
+    /// direct light as its layers (Convention::direct_layers).
+    bool path = false;
     OIIO::ROI noisy;  ///< the --in file's pixels
     RoleSelections roles;
     colour::ColourConfig config;

@@ -49,7 +49,7 @@ validate(const Job& job, Spelling spelling)
                             job.temporal)
                    : format("\"temporal\" must be 0 to 8, not {}",
                             job.temporal);
-    if (job.temporal > 0 && job.mode == Mode::Layers)
+    if (job.temporal > 0 && (job.mode == Mode::Layers || job.mode == Mode::Path))
         return "--temporal works in --mode beauty (the layers' light is "
                "not combined across frames yet; docs/TEMPORAL.md)";
     if (job.albedo_samples < 0)

@@ -1,0 +1,297 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// significance_filter() and keep_structure() (docs/FILTER.md section 14):
+// thin shadow lines and hard shadow edges in direct light keep their
+// contrast at every noise level where it exceeds four noise deviations,
+// flat light is smoothed, noise-free light is left exactly as it is, a
+// smoother's lost structure is given back, and the result does not depend
+// on threads or on how the image is cut; a direct layer of
+// layered_denoise() keeps a 1-px shadow line that the regression filter
+// alone fills in.
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/imagebufalgo.h>
+
+#include <zdenoise/zdenoise.h>
+
+#include "synthetic_scenes.h"
+
+using namespace OIIO;
+
+namespace {
+
+constexpr int W = 64, H = 48;
+constexpr float kLit = 1.0f, kShadow = 0.2f;
+
+/// Direct light of a sun on a floor: lit, with a 1-px shadow line at row
+/// 12, a 2-px line at rows 24-25 and a hard shadow right of column 44.
+float
+sunlit(int x, int y)
+{
+    if (y == 12 || y == 24 || y == 25 || x >= 44)
+        return kShadow;
+    return kLit;
+}
+
+/// The light with Gaussian noise of relative deviation `sigma` (of the lit
+/// level), the same multiplier in R, G, B.
+ImageBuf
+noisy_sunlit(float sigma, uint32_t seed = 7)
+{
+    std::mt19937 rng(seed);
+    std::normal_distribution<float> n(0.0f, 1.0f);
+    ImageBuf img(ImageSpec(W, H, 3, TypeFloat));
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const float v = sunlit(x, y) + sigma * kLit * n(rng);
+            const float px[3] = { v, 0.9f * v, 0.8f * v };
+            img.setpixel(x, y, px, 3);
+        }
+    return img;
+}
+
+/// The luminance of the light's colour (1, 0.9, 0.8) per unit level.
+float
+lum_weight_sum()
+{
+    return 0.2126f + 0.7152f * 0.9f + 0.0722f * 0.8f;
+}
+
+float
+lum(const ImageBuf& img, int x, int y)
+{
+    return float(synth::luminance(img, x, y));
+}
+
+/// Mean luminance of a row over the lit columns away from the edge.
+float
+row_mean(const ImageBuf& img, int y)
+{
+    float s = 0.0f;
+    for (int x = 4; x < 40; ++x)
+        s += lum(img, x, y);
+    return s / 36.0f;
+}
+
+/// The contrast of a shadow line at `y` against the lit rows 4 px away, as
+/// a fraction of the true contrast.
+float
+line_contrast_kept(const ImageBuf& img, int y, int width)
+{
+    const float lit  = 0.5f * (row_mean(img, y - 4) + row_mean(img, y + width + 3));
+    float line = 0.0f;
+    for (int k = 0; k < width; ++k)
+        line += row_mean(img, y + k) / float(width);
+    const float truth = (kLit - kShadow) * lum_weight_sum();
+    return (lit - line) / truth;
+}
+
+/// Deviation of luminance over the lit block x 4..40, rows 30..44.
+float
+lit_deviation(const ImageBuf& img)
+{
+    double s = 0, s2 = 0;
+    int n = 0;
+    for (int y = 30; y < 44; ++y)
+        for (int x = 4; x < 40; ++x) {
+            const double v = lum(img, x, y);
+            s += v;
+            s2 += v * v;
+            ++n;
+        }
+    const double m = s / n;
+    return float(std::sqrt(std::max(0.0, s2 / n - m * m)));
+}
+
+/// A 5x5 box mean: a smoother that fills thin lines in.
+ImageBuf
+box_smoothed(const ImageBuf& img)
+{
+    return ImageBufAlgo::convolve(img, ImageBufAlgo::make_kernel("box", 5, 5));
+}
+
+}  // namespace
+
+
+TEST(Significance, ThinShadowLinesAndEdgesKeepTheirContrastAndFlatLightIsSmoothed)
+{
+    // Contrast 0.8 of the lit level: above four deviations at every level.
+    for (float sigma : { 0.02f, 0.05f, 0.1f, 0.19f }) {
+        SCOPED_TRACE(sigma);
+        const ImageBuf in  = noisy_sunlit(sigma);
+        const ImageBuf out = zdenoise::significance_filter(in);
+        ASSERT_FALSE(out.has_error()) << out.geterror();
+        EXPECT_GT(line_contrast_kept(out, 12, 1), 0.9f) << "1-px line";
+        EXPECT_GT(line_contrast_kept(out, 24, 2), 0.9f) << "2-px line";
+        // The hard edge: the first shadow column stays dark.
+        float first_dark = 0.0f;
+        for (int y = 30; y < 44; ++y)
+            first_dark += lum(out, 44, y) / 14.0f;
+        EXPECT_LT(first_dark - kShadow * lum_weight_sum(),
+                  0.1f * (kLit - kShadow) * lum_weight_sum());
+        EXPECT_LT(lit_deviation(out) * 2.5f, lit_deviation(in))
+            << "flat light is smoothed";
+    }
+}
+
+
+TEST(Significance, NoiseFreeLightIsLeftExactly)
+{
+    const ImageBuf in = noisy_sunlit(0.0f);
+    const ImageBuf out = zdenoise::significance_filter(in);
+    EXPECT_TRUE(synth::same_pixels(out, in));
+    // And a smoother's change of it is undone everywhere it changed it.
+    const ImageBuf smoothed = box_smoothed(in);
+    const ImageBuf kept = zdenoise::keep_structure(in, smoothed);
+    ASSERT_FALSE(kept.has_error()) << kept.geterror();
+    // Away from the corner where the 1-px line meets the edge: there no
+    // direction's second differences are all 0, and V is not (FILTER.md 14).
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < 38; ++x)
+            ASSERT_NEAR(lum(kept, x, y), lum(in, x, y), 1e-3f * lum(in, x, y))
+                << x << "," << y;
+}
+
+
+TEST(Significance, KeepStructureGivesBackWhatASmootherRemovedAndNoMore)
+{
+    for (float sigma : { 0.05f, 0.15f }) {
+        SCOPED_TRACE(sigma);
+        const ImageBuf in       = noisy_sunlit(sigma);
+        const ImageBuf smoothed = box_smoothed(in);
+        ASSERT_LT(line_contrast_kept(smoothed, 12, 1), 0.5f) << "the smoother fills the line";
+        int64_t taken = 0;
+        ImageBuf kept;
+        ASSERT_TRUE(zdenoise::keep_structure(kept, in, smoothed, {}, {}, &taken));
+        EXPECT_GT(line_contrast_kept(kept, 12, 1), 0.9f);
+        EXPECT_GT(line_contrast_kept(kept, 24, 2), 0.9f);
+        // Away from the lines and the edge the smoother's result stays.
+        int same = 0, n = 0;
+        for (int y = 30; y < 44; ++y)
+            for (int x = 6; x < 38; ++x, ++n)
+                same += lum(kept, x, y) == lum(smoothed, x, y);
+        EXPECT_GT(same, n * 95 / 100);
+        EXPECT_GT(taken, 0);
+        EXPECT_LT(taken, int64_t(W) * H / 3);
+    }
+}
+
+
+TEST(Significance, NoiseEstimateIsCalibratedOnGaussianNoise)
+{
+    // Flat light with unit-variance noise: where nothing is kept (the test
+    // never fires on pure noise with the right variance at 99 %) the
+    // significance filter's acceptance is what the variance says; measure
+    // the estimate itself through keep_structure() against the true mean:
+    // the residual statistic's mean over the image is then about 1.
+    std::mt19937 rng(3);
+    std::normal_distribution<float> n(0.0f, 1.0f);
+    const int w = 160, h = 160;
+    ImageBuf in(ImageSpec(w, h, 3, TypeFloat)), mean(ImageSpec(w, h, 3, TypeFloat));
+    ImageBufAlgo::fill(mean, { 100.0f, 100.0f, 100.0f });
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const float v = 100.0f + n(rng);
+            const float px[3] = { v, v, v };
+            in.setpixel(x, y, px, 3);
+        }
+    int64_t taken = 0;
+    ImageBuf kept;
+    ASSERT_TRUE(zdenoise::keep_structure(kept, in, mean, {}, {}, &taken));
+    // At the 99 % level of chi-square(9)/9, about 1 % of pixels; an
+    // estimate 25 % low would flag about 6 %, 25 % high about 0.1 %.
+    const double fraction = double(taken) / double(w * h);
+    EXPECT_GT(fraction, 0.002);
+    EXPECT_LT(fraction, 0.03);
+}
+
+
+TEST(Significance, SameResultForAnyThreadCountAndCut)
+{
+    const ImageBuf in       = noisy_sunlit(0.08f);
+    const ImageBuf smoothed = box_smoothed(in);
+    ImageBuf one, two;
+    ASSERT_TRUE(zdenoise::keep_structure(one, in, smoothed, {}, {}, nullptr, {}, 1));
+    ASSERT_TRUE(zdenoise::keep_structure(two, in, smoothed, {}, {}, nullptr, {}, 2));
+    EXPECT_TRUE(synth::same_pixels(one, two));
+    // Two strips of rows, each given only its rows and the halo.
+    const ROI frame = in.roi();
+    const int halo  = zdenoise::significance_halo() + 1;
+    for (int y0 : { 0, 20 }) {
+        const int y1 = y0 == 0 ? 20 : H;
+        const ROI part(0, W, std::max(0, y0 - halo), std::min(H, y1 + halo));
+        ImageBuf in_part(ImageSpec(part, TypeFloat)), sm_part(ImageSpec(part, TypeFloat));
+        ImageBufAlgo::copy(in_part, in, TypeFloat, part);
+        ImageBufAlgo::copy(sm_part, smoothed, TypeFloat, part);
+        ImageBuf out;
+        ASSERT_TRUE(zdenoise::keep_structure(out, in_part, sm_part, {}, frame, nullptr,
+                                             ROI(0, W, y0, y1)))
+            << out.geterror();
+        for (int y = y0; y < y1; ++y)
+            for (int x = 0; x < W; ++x)
+                ASSERT_EQ(lum(out, x, y), lum(one, x, y)) << x << "," << y;
+    }
+}
+
+
+TEST(Significance, SurfacesAreKeptApartByTheNormal)
+{
+    // Two faces of the same light and noise: the left face's mean never
+    // takes the right face's pixels, whose light is brighter by less than
+    // the test can see.
+    ImageBuf in = noisy_sunlit(0.05f), normal(ImageSpec(W, H, 3, TypeFloat));
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const float n[3] = { x < 32 ? 0.0f : 1.0f, 0.0f, x < 32 ? 1.0f : 0.0f };
+            normal.setpixel(x, y, n, 3);
+            if (x >= 32 && x < 44) {
+                float px[3];
+                in.getpixel(x, y, px, 3);
+                for (float& v : px)
+                    v *= 1.03f;
+                in.setpixel(x, y, px, 3);
+            }
+        }
+    zdenoise::Guides g;
+    g.normal = &normal;
+    const ImageBuf out = zdenoise::significance_filter(in, g);
+    float left = 0.0f, right = 0.0f;
+    for (int y = 30; y < 44; ++y) {
+        left += lum(out, 31, y) / 14.0f;
+        right += lum(out, 32, y) / 14.0f;
+    }
+    EXPECT_GT(right - left, 0.02f * lum_weight_sum());
+}
+
+
+TEST(Significance, ADirectLayerKeepsAThinShadowLineTheRegressionFillsIn)
+{
+    // DiffDir of a sunlit floor at 3 % noise; the colour is flat.
+    const ImageBuf light = noisy_sunlit(0.03f);
+    ImageBuf colour(ImageSpec(W, H, 3, TypeFloat));
+    ImageBufAlgo::fill(colour, { 0.6f, 0.6f, 0.6f });
+    auto run = [&](bool direct) {
+        std::vector<zdenoise::Layer> layers(1);
+        layers[0].name     = "DiffDir";
+        layers[0].radiance = &light;
+        layers[0].albedo   = &colour;
+        layers[0].divided  = true;
+        layers[0].direct   = direct;
+        zdenoise::FilterStats stats;
+        ImageBuf out = zdenoise::layered_denoise(layers, nullptr, {}, {}, &stats);
+        EXPECT_FALSE(out.has_error()) << out.geterror();
+        EXPECT_EQ(stats.kept_pixels > 0, direct);
+        return ImageBufAlgo::div(out, colour);
+    };
+    const ImageBuf regression = run(false), direct = run(true);
+    EXPECT_GT(line_contrast_kept(direct, 12, 1), 0.9f);
+    EXPECT_GT(line_contrast_kept(direct, 12, 1), line_contrast_kept(regression, 12, 1));
+    EXPECT_LT(lit_deviation(direct) * 3.0f, lit_deviation(light))
+        << "the flat light stays the regression's";
+}
