@@ -20,6 +20,7 @@
 
 #include <zdenoise/zdenoise.h>
 
+#include "cli_test.h"
 #include "synthetic_scenes.h"
 
 using namespace OIIO;
@@ -185,30 +186,44 @@ TEST(Significance, KeepStructureGivesBackWhatASmootherRemovedAndNoMore)
 
 TEST(Significance, NoiseEstimateIsCalibratedOnGaussianNoise)
 {
-    // Flat light with unit-variance noise: where nothing is kept (the test
-    // never fires on pure noise with the right variance at 99 %) the
-    // significance filter's acceptance is what the variance says; measure
-    // the estimate itself through keep_structure() against the true mean:
-    // the residual statistic's mean over the image is then about 1.
+    // Flat light with unit-variance Gaussian noise: noise_variance()'s mean
+    // is 1 (its calibration, kMinimumOfFourBias); with a 1-px line of
+    // 20 deviations' contrast across it, the line's pixels and their
+    // neighbours still read about the noise, not the line.
     std::mt19937 rng(3);
     std::normal_distribution<float> n(0.0f, 1.0f);
     const int w = 160, h = 160;
-    ImageBuf in(ImageSpec(w, h, 3, TypeFloat)), mean(ImageSpec(w, h, 3, TypeFloat));
-    ImageBufAlgo::fill(mean, { 100.0f, 100.0f, 100.0f });
+    ImageBuf flat(ImageSpec(w, h, 3, TypeFloat)), lined(ImageSpec(w, h, 3, TypeFloat));
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
-            const float v = 100.0f + n(rng);
-            const float px[3] = { v, v, v };
-            in.setpixel(x, y, px, 3);
+            const float v  = 100.0f + n(rng);
+            const float f[3] = { v, v, v };
+            const float l = v - (y == 80 ? 20.0f : 0.0f);
+            const float g[3] = { l, l, l };
+            flat.setpixel(x, y, f, 3);
+            lined.setpixel(x, y, g, 3);
         }
-    int64_t taken = 0;
-    ImageBuf kept;
-    ASSERT_TRUE(zdenoise::keep_structure(kept, in, mean, {}, {}, &taken));
-    // At the 99 % level of chi-square(9)/9, about 1 % of pixels; an
-    // estimate 25 % low would flag about 6 %, 25 % high about 0.1 %.
-    const double fraction = double(taken) / double(w * h);
-    EXPECT_GT(fraction, 0.002);
-    EXPECT_LT(fraction, 0.03);
+    auto mean_v = [](const ImageBuf& v, int y0, int y1) {
+        double s = 0.0;
+        for (int y = y0; y < y1; ++y)
+            for (int x = 8; x < w - 8; ++x) {
+                float px;
+                v.getpixel(x, y, &px, 1);
+                s += px;
+            }
+        return s / double((y1 - y0) * (w - 16));
+    };
+    ImageBuf v_flat, v_lined;
+    ASSERT_TRUE(zdenoise::noise_variance(v_flat, flat)) << v_flat.geterror();
+    ASSERT_TRUE(zdenoise::noise_variance(v_lined, lined)) << v_lined.geterror();
+    EXPECT_NEAR(mean_v(v_flat, 8, h - 8), 1.0, 0.05);
+    // Beside the line only the direction along it reads noise alone, and
+    // the correction for the smallest of four noise pools makes that one
+    // read 1 / 0.743 = 1.35: high by at most that, never by the line's
+    // contrast (20^2 = 400).
+    EXPECT_GT(mean_v(v_lined, 78, 83), 0.95);
+    EXPECT_LT(mean_v(v_lined, 78, 83), 1.45) << "the line is not taken for noise";
+    EXPECT_EQ(zdenoise::noise_variance_halo(), 3);
 }
 
 
@@ -294,4 +309,99 @@ TEST(Significance, ADirectLayerKeepsAThinShadowLineTheRegressionFillsIn)
     EXPECT_GT(line_contrast_kept(direct, 12, 1), line_contrast_kept(regression, 12, 1));
     EXPECT_LT(lit_deviation(direct) * 3.0f, lit_deviation(light))
         << "the flat light stays the regression's";
+}
+
+
+namespace {
+
+/// A Cycles render of a sunlit textured floor: DiffDir the sun's light
+/// with 1-px and 2-px shadow lines and a hard shadow (3 % noise), DiffInd
+/// smooth bounce light at 100 % noise, a checker DiffCol; Combined their
+/// composition. Writes it and returns the clean Combined.
+ImageBuf
+write_sunlit_floor(const std::string& file)
+{
+    std::mt19937 rng(11);
+    std::normal_distribution<float> n(0.0f, 1.0f);
+    std::gamma_distribution<float> sparse(1.0f, 1.0f);  // exponential: skewed like MC
+    const std::vector<std::string> names = {
+        "ViewLayer.Combined.R",         "ViewLayer.Combined.G",         "ViewLayer.Combined.B",
+        "ViewLayer.Denoising Albedo.R", "ViewLayer.Denoising Albedo.G", "ViewLayer.Denoising Albedo.B",
+        "ViewLayer.Denoising Normal.X", "ViewLayer.Denoising Normal.Y", "ViewLayer.Denoising Normal.Z",
+        "ViewLayer.DiffCol.R",          "ViewLayer.DiffCol.G",          "ViewLayer.DiffCol.B",
+        "ViewLayer.DiffDir.R",          "ViewLayer.DiffDir.G",          "ViewLayer.DiffDir.B",
+        "ViewLayer.DiffInd.R",          "ViewLayer.DiffInd.G",          "ViewLayer.DiffInd.B",
+        "ViewLayer.Env.R",              "ViewLayer.Env.G",              "ViewLayer.Env.B"
+    };
+    ImageSpec spec(W, H, int(names.size()), TypeFloat);
+    spec.channelnames  = names;
+    spec.alpha_channel = -1;
+    spec.attribute("cycles.ViewLayer.samples", "16");
+    ImageBuf img(spec), clean(ImageSpec(W, H, 3, TypeFloat));
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const float col    = ((x / 3 + y / 3) % 2) ? 0.7f : 0.4f;
+            const float sun    = sunlit(x, y);
+            const float bounce = 0.3f;
+            const float dir    = sun * (1.0f + 0.03f * n(rng));
+            const float ind    = bounce * sparse(rng);
+            std::vector<float> px = { col * (dir + ind), col * (dir + ind), col * (dir + ind),
+                                      col, col, col, 0.0f, 1.0f, 0.0f, col, col, col,
+                                      dir, dir, dir, ind, ind, ind, 0.0f, 0.0f, 0.0f };
+            img.setpixel(x, y, px.data(), int(px.size()));
+            const float c[3] = { col * (sun + bounce), col * (sun + bounce), col * (sun + bounce) };
+            clean.setpixel(x, y, c, 3);
+        }
+    EXPECT_TRUE(img.write(file)) << img.geterror();
+    return clean;
+}
+
+/// Combined RGB of a zdenoise output.
+ImageBuf
+combined(const std::string& file)
+{
+    ImageBuf out(file);
+    EXPECT_TRUE(out.read(0, 0, true, TypeFloat)) << out.geterror();
+    const int c = out.spec().channelindex("ViewLayer.Combined.R");
+    ImageBuf rgb;
+    ImageBufAlgo::channels(rgb, out, 3, { c, c + 1, c + 2 });
+    return rgb;
+}
+
+}  // namespace
+
+
+class PathCli : public cli_test::CliTest {};
+
+TEST_F(PathCli, ThinShadowLinesAreKeptWhileTheBounceLightIsSmoothed)
+{
+    const ImageBuf clean = write_sunlit_floor(path("floor.exr"));
+    ASSERT_EQ(run("--in " + path("floor.exr") + " -o " + path("path.exr") + " --mode path")
+                  .status,
+              0);
+    ASSERT_EQ(run("--in " + path("floor.exr") + " -o " + path("beauty.exr")).status, 0);
+    const ImageBuf noisy = combined(path("floor.exr"));
+    const ImageBuf out = combined(path("path.exr")), beauty = combined(path("beauty.exr"));
+    // The lines' contrast against the lit floor (the checker divides out).
+    auto contrast = [&](const ImageBuf& img, int y, int width) {
+        const ImageBuf light = ImageBufAlgo::div(img, combined(path("floor.exr")));
+        (void)light;
+        float lit = 0.0f, line = 0.0f, truth_lit = 0.0f, truth_line = 0.0f;
+        for (int x = 4; x < 40; ++x) {
+            for (int k = 0; k < width; ++k) {
+                line += lum(img, x, y + k);
+                truth_line += lum(clean, x, y + k);
+            }
+            lit += lum(img, x, y - 4) * float(width);
+            truth_lit += lum(clean, x, y - 4) * float(width);
+        }
+        return (lit - line) / (truth_lit - truth_line);
+    };
+    EXPECT_GT(contrast(out, 12, 1), 0.9f) << "1-px line";
+    EXPECT_GT(contrast(out, 24, 2), 0.9f) << "2-px line";
+    EXPECT_GT(contrast(out, 12, 1), contrast(beauty, 12, 1));
+    // The frame: much better than the input, and than beauty mode.
+    const double e_noisy = synth::rel_mse(noisy, clean), e_path = synth::rel_mse(out, clean);
+    EXPECT_LT(e_path * 10.0, e_noisy);
+    EXPECT_LT(e_path, synth::rel_mse(beauty, clean));
 }

@@ -375,6 +375,19 @@ ZDENOISE_API ImageBuf keep_structure(const ImageBuf& light,
                                      ROI frame = {}, int64_t* kept = nullptr,
                                      ROI roi = {}, int nthreads = 0);
 
+/// The noise estimate of significance_filter() (docs/FILTER.md section 14):
+/// the variance V of the luminance of `light` at each pixel of roi, from
+/// the image itself, into `dst` (1 float channel); NaN where it cannot be
+/// estimated (a non-finite pixel, or no neighbour on its surface).
+/// Parameters as for significance_filter(); the inputs must cover roi
+/// widened by noise_variance_halo().
+ZDENOISE_API bool noise_variance(ImageBuf& dst, const ImageBuf& light,
+                                 const Guides& guides = {}, ROI frame = {},
+                                 ROI roi = {}, int nthreads = 0);
+
+/// How far an output pixel of noise_variance() looks.
+ZDENOISE_API int noise_variance_halo();
+
 /// How far an output pixel of significance_filter() and keep_structure()
 /// looks: the 5-px search, its 3x3 test and the noise estimate's 5x5 of
 /// second differences.

@@ -185,6 +185,9 @@ class ZDENOISE_SceneSettings(bpy.types.PropertyGroup):
         description="zdenoise --mode",
         items=(
             ("beauty", "Beauty", "Denoise the beauty (Combined) with the albedo"),
+            ("path", "Light by path", "Filter the diffuse direct light apart from the rest, "
+                                      "keeping hard and thin shadows (turns on the Diffuse "
+                                      "Direct and Color passes)"),
             ("layers", "Layers", "Denoise each lobe (diffuse, glossy, transmission) with its "
                                  "own colour and add the rest (turns on the lobe passes)"),
         ),
@@ -209,6 +212,8 @@ class ZDENOISE_SceneSettings(bpy.types.PropertyGroup):
 
 LOBE_PASSES = tuple(f"use_pass_{lobe}_{part}" for lobe in ("diffuse", "glossy", "transmission")
                     for part in ("direct", "indirect", "color"))
+# What --mode path needs: the diffuse direct light apart, and its colour.
+PATH_PASSES = ("use_pass_diffuse_direct", "use_pass_diffuse_color")
 
 
 def ensure_passes(scene):
@@ -219,7 +224,8 @@ def ensure_passes(scene):
     zdenoise has no albedo and cannot denoise, and the user who ticked the add-on asked for
     the denoising; the passes change nothing in the Combined pass and are saved with the
     file like any other setting (turn them off again by hand). The same for the lobe passes
-    (Diffuse, Glossy, Transmission Direct/Indirect/Color) in the layers mode."""
+    (Diffuse, Glossy, Transmission Direct/Indirect/Color) in the layers mode, and the Diffuse
+    Direct and Color passes in the path mode."""
     notes = []
     for vl in scene.view_layers:
         if not vl.use:
@@ -228,12 +234,13 @@ def ensure_passes(scene):
         if cycles is not None and not cycles.denoising_store_passes:
             cycles.denoising_store_passes = True
             notes.append(f"the Denoising Data passes of view layer '{vl.name}'")
-        if scene.zdenoise.mode == "layers":
-            off = [p for p in LOBE_PASSES if not getattr(vl, p)]
-            for p in off:
-                setattr(vl, p, True)
-            if off:
-                notes.append(f"the Diffuse/Glossy/Transmission passes of view layer '{vl.name}'")
+        needed = {"layers": LOBE_PASSES, "path": PATH_PASSES}.get(scene.zdenoise.mode, ())
+        off = [p for p in needed if not getattr(vl, p)]
+        for p in off:
+            setattr(vl, p, True)
+        if off:
+            notes.append(f"the {'Diffuse Direct/Color' if scene.zdenoise.mode == 'path' else 'Diffuse/Glossy/Transmission'} "
+                         f"passes of view layer '{vl.name}'")
     return notes
 
 
@@ -613,8 +620,8 @@ def run(job):
         if job.output:
             os.makedirs(os.path.dirname(job.output) or ".", exist_ok=True)
         command = [job.executable, "--in", job.render, "-o", job.denoised]
-        if job.mode == "layers":
-            command += ["--mode", "layers"]
+        if job.mode != "beauty":
+            command += ["--mode", job.mode]
         if job.aux:
             command += ["--aux", job.aux]
         p = _run(command)

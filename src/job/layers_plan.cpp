@@ -291,28 +291,103 @@ divide_through_specular(ImageBuf& radiance, ImageBuf& colour,
 }
 
 
-/// A direct layer that came divided (Cycles' DiffDir) as the light it is,
-/// DiffDir * DiffCol, over the residual layer's albedo (the prefiltered
-/// Denoising Albedo, before its mask): the regression filter then sees it
-/// as beauty mode sees the beauty, which measured better than its quotient
-/// on the public set (docs/LAYERS.md "Light by path").
-void
-as_direct_radiance(Layer& layer, ImageBuf& radiance, ImageBuf& colour,
-                   ImageBuf& remodulation, const ImageBuf& residual_albedo,
-                   const Job& j)
+
+/// The mean of `v` over the (2 r + 1)^2 box around each pixel (over what
+/// lies in the image and is finite), rows then columns.
+std::vector<float>
+box_mean(const std::vector<float>& v, int w, int h, int r)
 {
-    if (!layer.divided)
-        return;
-    ImageBuf light;
-    if (!ImageBufAlgo::mul(light, radiance, colour, {}, j.threads))
-        fail(format("layer '{}' of '{}': {}", layer.name, j.in.path,
-                    one_line(light.geterror())));
-    radiance.swap(light);
-    ImageBuf albedo = residual_albedo.copy(TypeFloat);
-    colour.swap(albedo);
-    remodulation.reset();
-    layer.remodulation_albedo = nullptr;
-    layer.divided             = false;
+    std::vector<float> rows(v.size()), out(v.size()), nrows(v.size());
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            float s = 0.0f, n = 0.0f;
+            for (int u = std::max(x - r, 0); u <= std::min(x + r, w - 1); ++u) {
+                const float e = v[size_t(y) * size_t(w) + size_t(u)];
+                if (std::isfinite(e)) {
+                    s += e;
+                    n += 1.0f;
+                }
+            }
+            rows[size_t(y) * size_t(w) + size_t(x)]  = s;
+            nrows[size_t(y) * size_t(w) + size_t(x)] = n;
+        }
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            float s = 0.0f, n = 0.0f;
+            for (int t = std::max(y - r, 0); t <= std::min(y + r, h - 1); ++t) {
+                s += rows[size_t(t) * size_t(w) + size_t(x)];
+                n += nrows[size_t(t) * size_t(w) + size_t(x)];
+            }
+            out[size_t(y) * size_t(w) + size_t(x)] = n > 0.0f ? s / n : 0.0f;
+        }
+    return out;
+}
+
+
+std::vector<float>
+luminance_plane(const std::vector<float>& rgb)
+{
+    std::vector<float> y(rgb.size() / 3);
+    for (size_t i = 0; i < y.size(); ++i)
+        y[i] = 0.2126f * rgb[3 * i] + 0.7152f * rgb[3 * i + 1] + 0.0722f * rgb[3 * i + 2];
+    return y;
+}
+
+
+/// Light by path keeps the direct light apart only where it is cleaner
+/// than the rest of the light: its relative noise, sqrt(V) over its level,
+/// both pooled over the 17x17 (V from noise_variance()), below the
+/// residual's.
+/// Elsewhere (a sky's light through a window, found by few samples)
+/// splitting leaves two noisier images to filter instead of one, and the
+/// direct light goes back to the residual. The share kept apart is that
+/// decision's 17x17 mean, so that neither image takes a seam where it
+/// changes: the quotient is scaled by it, the rest of the light added to
+/// the residual.
+void
+route_direct_light(ImageBuf& quotient, const ImageBuf& colour,
+                   ImageBuf& residual, const ImageBuf& beauty, const Job& j,
+                   const std::string& name)
+{
+    constexpr int kPool = 8;
+    ImageBuf direct, v_direct, v_beauty;
+    const ROI all = quotient.roi();
+    if (!ImageBufAlgo::mul(direct, quotient, colour, {}, j.threads)
+        || !noise_variance(v_direct, direct, {}, all, all, j.threads)
+        || !noise_variance(v_beauty, residual, {}, all, all, j.threads))
+        fail(format("layer '{}' of '{}': {}", name, j.in.path,
+                    one_line(direct.geterror() + v_direct.geterror()
+                             + v_beauty.geterror())));
+    const int w = all.width(), h = all.height();
+    const size_t n = size_t(w) * size_t(h);
+    ROI rgb    = all;
+    rgb.chbegin = 0;
+    rgb.chend   = 3;
+    ROI one    = all;
+    one.chbegin = 0;
+    one.chend   = 1;
+    std::vector<float> d(3 * n), b(3 * n), q(3 * n), r(3 * n), vd(n), vb(n);
+    direct.get_pixels(rgb, TypeFloat, d.data());
+    residual.get_pixels(rgb, TypeFloat, b.data());
+    quotient.get_pixels(rgb, TypeFloat, q.data());
+    residual.get_pixels(rgb, TypeFloat, r.data());
+    v_direct.get_pixels(one, TypeFloat, vd.data());
+    v_beauty.get_pixels(one, TypeFloat, vb.data());
+    const std::vector<float> yd = box_mean(luminance_plane(d), w, h, kPool);
+    const std::vector<float> yb = box_mean(luminance_plane(b), w, h, kPool);
+    const std::vector<float> pd = box_mean(vd, w, h, kPool);
+    const std::vector<float> pb = box_mean(vb, w, h, kPool);
+    std::vector<float> cleaner(n);
+    for (size_t i = 0; i < n; ++i)
+        cleaner[i] = pd[i] * yb[i] * yb[i] < pb[i] * yd[i] * yd[i] ? 1.0f : 0.0f;
+    const std::vector<float> share = box_mean(cleaner, w, h, kPool);
+    for (size_t i = 0; i < n; ++i)
+        for (int c = 0; c < 3; ++c) {
+            r[3 * i + size_t(c)] += (1.0f - share[i]) * d[3 * i + size_t(c)];
+            q[3 * i + size_t(c)] *= share[i];
+        }
+    quotient.set_pixels(rgb, TypeFloat, q.data());
+    residual.set_pixels(rgb, TypeFloat, r.data());
 }
 
 }  // namespace
@@ -404,8 +479,8 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
                                     j.threads);
     for (size_t k = 0; k < given; ++k)
         if (plan.layers[k].direct)
-            as_direct_radiance(layers[k], l.radiance[k], l.albedo[k],
-                               l.remodulation[k], l.albedo[i], j);
+            route_direct_light(l.radiance[k], l.albedo[k], l.radiance[i], beauty,
+                               j, plan.layers[k].name);
     // The mask reads float images; the beauty may be the file's half rows.
     const ImageBuf beauty_float = beauty.spec().format == TypeFloat
                                       ? ImageBuf()

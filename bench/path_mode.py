@@ -1,0 +1,124 @@
+#!/usr/bin/python3
+"""path_mode.py - zdenoise's modes side by side, whole frame, sunlit region and 8x8 tiles.
+
+For each noisy render SCENE_sppN_sS.exr (the layout of shared/data and of
+bench/scenes/render_set.sh) under each --data folder, runs `zdenoise --mode M` for every
+mode of --modes and prints, against SCENE_ref.exr (Combined RGB):
+
+* relMSE of the whole frame, and each mode's ratio to the first mode;
+* relMSE over the sunlit region: the brightest 15 % of the reference's direct diffuse light
+  (DiffDir x DiffCol);
+* "tiles worse": the number of 8x8 tiles whose relMSE is above the noisy input's by more
+  than 1e-4, and the largest such excess (issue 44's count of regions made worse).
+
+    bench/path_mode.py --data ../shared/data --data /renders           # every case found
+    bench/path_mode.py --data ../shared/data --spp 16 --seeds 1 --scenes zigzag_steps
+
+Runs with Debian's /usr/bin/python3 (OpenImageIO, numpy). Exit 0, or 2 on a setup error.
+"""
+import argparse
+import glob
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+import OpenImageIO as oiio
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def channels(path, names):
+    buf = oiio.ImageBuf(path)
+    spec = buf.spec()
+    pixels = buf.get_pixels(oiio.FLOAT)
+    missing = [n for n in names if n not in spec.channelnames]
+    if missing:
+        return None
+    return np.stack([pixels[..., spec.channelnames.index(n)] for n in names], -1)
+
+
+def rgb(path, layer):
+    return channels(path, [f"ViewLayer.{layer}.{c}" for c in "RGB"])
+
+
+def rel_error(img, ref):
+    return ((img - ref) ** 2 / (ref * ref + 1e-2)).mean(-1)
+
+
+def tiles_worse(out, noisy, ref):
+    e, e0 = rel_error(out, ref), rel_error(noisy, ref)
+    h, w = (e.shape[0] // 8) * 8, (e.shape[1] // 8) * 8
+    t = e[:h, :w].reshape(h // 8, 8, w // 8, 8).mean((1, 3))
+    t0 = e0[:h, :w].reshape(h // 8, 8, w // 8, 8).mean((1, 3))
+    excess = t - t0
+    return int((excess > 1e-4).sum()), float(max(excess.max(), 0.0))
+
+
+def cases(args):
+    pattern = re.compile(r"(.+)_spp(\d+)_s(\d+)\.exr$")
+    for data in args.data:
+        for path in sorted(glob.glob(os.path.join(data, "*", "*_spp*_s*.exr"))):
+            m = pattern.match(os.path.basename(path))
+            if not m:
+                continue
+            scene, spp, seed = m.group(1), int(m.group(2)), int(m.group(3))
+            ref = os.path.join(os.path.dirname(path), f"{scene}_ref.exr")
+            if (args.scenes and scene not in args.scenes) or spp not in args.spp \
+                    or seed not in args.seeds or not os.path.exists(ref):
+                continue
+            yield scene, spp, seed, path, ref
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--data", action="append", default=[])
+    ap.add_argument("--zdenoise", default=os.path.join(REPO, "build", "bin", "zdenoise"))
+    ap.add_argument("--modes", default="beauty,path")
+    ap.add_argument("--spp", default="4,16,64")
+    ap.add_argument("--seeds", default="1,2")
+    ap.add_argument("--scenes", default="")
+    args = ap.parse_args()
+    args.data = args.data or [os.path.join(REPO, "..", "shared", "data")]
+    args.spp = [int(s) for s in args.spp.split(",")]
+    args.seeds = [int(s) for s in args.seeds.split(",")]
+    args.scenes = [s for s in args.scenes.split(",") if s]
+    modes = args.modes.split(",")
+    if not os.access(args.zdenoise, os.X_OK):
+        print(f"path_mode.py: no zdenoise at {args.zdenoise}", file=sys.stderr)
+        return 2
+    head = ["scene", "spp", "seed"]
+    for m in modes:
+        head += [f"{m} relMSE", "ratio", "sunlit", "tiles worse (max)"]
+    print(" | ".join(head))
+    tmp = tempfile.mkdtemp(prefix="zd_path_mode_")
+    for scene, spp, seed, path, ref_path in cases(args):
+        ref = rgb(ref_path, "Combined")
+        noisy = rgb(path, "Combined")
+        direct = rgb(ref_path, "DiffDir")
+        colour = rgb(ref_path, "DiffCol")
+        lum = lambda x: x @ np.array([0.2126, 0.7152, 0.0722], np.float32)
+        sun = None
+        if direct is not None and colour is not None:
+            y = lum(direct * colour)
+            sun = y > np.percentile(y, 85)
+        row, first = [scene, str(spp), str(seed)], None
+        for m in modes:
+            out = os.path.join(tmp, f"{m}.exr")
+            subprocess.run([args.zdenoise, "--in", path, "-o", out, "--mode", m],
+                           check=True, stdout=subprocess.DEVNULL)
+            img = rgb(out, "Combined")
+            whole = float(rel_error(img, ref).mean())
+            first = first or whole
+            sunlit = float(rel_error(img, ref)[sun].mean()) if sun is not None else float("nan")
+            worse, excess = tiles_worse(img, noisy, ref)
+            row += [f"{whole:.5f}", f"{whole / first:.3f}", f"{sunlit:.5f}",
+                    f"{worse} ({excess:.3f})"]
+        print(" | ".join(row), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
