@@ -111,7 +111,9 @@ denoise_layer(ImageBuf& dst, const Layer& layer, const Guides& shared,
     contribution = &out;
     bool ok             = true;
     // A direct layer is filtered one pixel beyond roi: keep_structure()'s
-    // test at roi's border reads it.
+    // test at roi's border reads it. Its window statistics would count that
+    // ring, which depends on how the frame is cut: only its kept pixels
+    // are counted.
     const bool direct   = layer.direct && layer.filter;
     const ROI filtered_roi = direct ? detail::halo_region(roi, options.frame, 1)
                                     : roi;
@@ -121,8 +123,8 @@ denoise_layer(ImageBuf& dst, const Layer& layer, const Guides& shared,
             return true;
         }
         ok = denoise(out, *layer.radiance, *layer.albedo,
-                     layer.remodulation_albedo, guides, options, stats,
-                     filtered_roi, nthreads)
+                     layer.remodulation_albedo, guides, options,
+                     direct ? nullptr : stats, filtered_roi, nthreads)
              && (!direct
                  || keep_radiance_structure(out, *layer.radiance,
                                             *layer.albedo, guides, options,
@@ -136,8 +138,8 @@ denoise_layer(ImageBuf& dst, const Layer& layer, const Guides& shared,
         ImageBuf filtered;
         if (layer.filter) {
             if (!regression_filter(filtered, *layer.radiance, *layer.albedo,
-                                   guides, options, stats, filtered_roi,
-                                   nthreads)
+                                   guides, options, direct ? nullptr : stats,
+                                   filtered_roi, nthreads)
                 || (direct
                     && !keep_direct_structure(filtered, *layer.radiance,
                                               guides, options.frame, stats,

@@ -260,14 +260,17 @@ TEST_F(CliTest, CyclesAlbedoIsPrefilteredWithTheRendersSamples)
                            + "/share/samples/cornell_textured_spp16_crop.exr";
     const std::string ref = kSourceDir
                             + "/share/samples/cornell_textured_ref_crop.exr";
-    RunResult r = run("--in '" + in + "' -o '" + path("pre.exr") + "' -v");
+    // Beauty mode's albedo, named (--mode path prefilters its colours the
+    // same way).
+    const std::string beauty = " --mode beauty";
+    RunResult r = run("--in '" + in + "' -o '" + path("pre.exr") + "' -v" + beauty);
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.out.find("albedo    prefiltered as 16 samples a pixel "
                          "(cycles.ViewLayer.samples)"),
               std::string::npos)
         << r.out;
     r = run("--in '" + in + "' -o '" + path("plain.exr")
-            + "' --no-albedo-prefilter -v");
+            + "' --no-albedo-prefilter -v" + beauty);
     ASSERT_EQ(r.status, 0) << r.err;
     EXPECT_NE(r.out.find("not prefiltered (--no-albedo-prefilter)"),
               std::string::npos)
@@ -284,7 +287,7 @@ TEST_F(CliTest, CyclesAlbedoIsPrefilteredWithTheRendersSamples)
     // even).
     double with_today = 0.0, without_today = 0.0;
     for (const char* flags : { "", " --no-albedo-prefilter" }) {
-        r = run("--in '" + in + "' -o '" + path("today.exr") + "' --select 0" + flags);
+        r = run("--in '" + in + "' -o '" + path("today.exr") + "' --select 0" + flags + beauty);
         ASSERT_EQ(r.status, 0) << r.err;
         ImageBuf today(path("today.exr"));
         ASSERT_TRUE(today.read(0, 0, true, TypeFloat));

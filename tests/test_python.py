@@ -288,11 +288,12 @@ class Arrays(unittest.TestCase):
 
     def test_matches_the_command_on_the_cycles_channels(self):
         # The array call on the channels the command picks from the sample
-        # (a scene-linear EXR: no colour conversion) is the command's beauty.
+        # (a scene-linear EXR: no colour conversion) is the command's beauty
+        # mode.
         with tempfile.TemporaryDirectory() as folder:
             out = os.path.join(folder, "beauty.exr")
-            subprocess.run([CLI, "--in", SAMPLE, "-o", out, "--eta", "0.03"],
-                           check=True, env=command_env())
+            subprocess.run([CLI, "--in", SAMPLE, "-o", out, "--eta", "0.03",
+                            "--mode", "beauty"], check=True, env=command_env())
             expected, names = read_pixels(out)
         pixels, names = read_pixels(SAMPLE)
 
@@ -488,10 +489,10 @@ class Module(unittest.TestCase):
             self.assertEqual(r.returncode, 0, r.stderr)
             self.assertIn("-> " + out, r.stdout)
             denoised, names = read_pixels(out)
-            # Its output is the command's, every channel.
+            # Its output is the command's in beauty mode, every channel.
             by_command = os.path.join(folder, "cmd.exr")
-            subprocess.run([CLI, "--in", SAMPLE, "-o", by_command, "--eta", "0.03"],
-                           check=True, env=command_env())
+            subprocess.run([CLI, "--in", SAMPLE, "-o", by_command, "--eta", "0.03",
+                            "--mode", "beauty"], check=True, env=command_env())
             expected, expected_names = read_pixels(by_command)
             self.assertEqual(names, expected_names)
             self.assertTrue(np.array_equal(denoised, expected))

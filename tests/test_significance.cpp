@@ -379,7 +379,12 @@ TEST_F(PathCli, ThinShadowLinesAreKeptWhileTheBounceLightIsSmoothed)
     ASSERT_EQ(run("--in " + path("floor.exr") + " -o " + path("path.exr") + " --mode path")
                   .status,
               0);
-    ASSERT_EQ(run("--in " + path("floor.exr") + " -o " + path("beauty.exr")).status, 0);
+    ASSERT_EQ(run("--in " + path("floor.exr") + " -o " + path("default.exr")).status, 0);
+    ASSERT_EQ(run("--in " + path("floor.exr") + " -o " + path("beauty.exr") + " --mode beauty")
+                  .status,
+              0);
+    EXPECT_TRUE(synth::same_pixels(combined(path("default.exr")), combined(path("beauty.exr"))))
+        << "no flags is --mode beauty until path is never worse (docs/LAYERS.md)";
     const ImageBuf noisy = combined(path("floor.exr"));
     const ImageBuf out = combined(path("path.exr")), beauty = combined(path("beauty.exr"));
     // The lines' contrast against the lit floor (the checker divides out).

@@ -256,7 +256,9 @@ TEST_F(StreamTest, StripsOfTiledFilesOffsetWindowsAndLayersAreExact)
     write_frame(path("guides.exr"), big);
     // Rows read around a strip: the filter's halo, 2 * 6 + 6 + 2 (the
     // default stride 3 reaches 2 further), the selection's 44, and in
-    // layers mode also the reach of the residual layer's mask, r_max.
+    // layers mode also the reach of the residual layer's mask, r_max. In
+    // path mode, one more for the direct layer's test and the direct
+    // light's routing, 3 + 2 * 8.
     struct Case {
         const char* name;
         std::string args;
@@ -264,6 +266,7 @@ TEST_F(StreamTest, StripsOfTiledFilesOffsetWindowsAndLayersAreExact)
         const char* around;
     } cases[] = {
         { "beauty", "", "1", "64" },
+        { "path", " --mode path", "1", "90" },
         { "layers", " --mode layers --aovs -d float", "23", "70" },
         // The layers' colours prefiltered: 5 rows more for the prefilter.
         { "layers, prefiltered colours", " --mode layers --albedo-samples 4", "23", "75" },

@@ -574,7 +574,9 @@ struct Layer {
     /// what it smoothed beyond the layer's noise (docs/FILTER.md section
     /// 14, docs/LAYERS.md "Light by path"). With a direct layer, the
     /// images must cover one more pixel around roi than filter_halo() says
-    /// (keep_structure()'s 3x3 test).
+    /// (keep_structure()'s 3x3 test). Its `stats` count only kept_pixels
+    /// (its windows reach that extra ring, which depends on how the frame
+    /// is cut).
     bool direct = false;
     /// If not null, a cleaner image of the layer's albedo (the lobe colour
     /// of a deterministic auxiliary render, docs/AUX.md) that remodulates

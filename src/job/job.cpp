@@ -97,8 +97,8 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
         fail(format("--mode path: '{}' has no direct light pass apart (Cycles' "
                     "DiffDir with DiffCol and Denoising Albedo; docs/LAYERS.md)",
                     j.in.path));
-    // Not yet the default: measured worse than beauty mode on two of the
-    // public scenes (docs/LAYERS.md "Light by path").
+    // Not the default yet: on ten scenes it is worse than beauty mode on
+    // three (exterior_foliage up to 1.45x; docs/LAYERS.md "Light by path").
     p.path = j.mode == Mode::Path;
     const std::vector<LayerArg>& layer_args
         = p.path ? conv.direct_layers

@@ -24,6 +24,17 @@ using OIIO::Strutil::fmt::format;
 
 namespace {
 
+/// route_direct_light()'s pools: the 17x17 around each pixel.
+constexpr int kPool = 8;
+
+/// How far route_direct_light() looks: the noise estimate, the pooled
+/// decision, and the share pooled again.
+int
+route_reach()
+{
+    return noise_variance_halo() + 2 * kPool;
+}
+
 /// Whether any of the n elements within r of each element (the window
 /// clipped at both ends, `stride` apart) is set: a running count, so that
 /// its cost does not grow with r.
@@ -153,7 +164,12 @@ plan_layers(InputFiles& files, const Job& j,
                             shown_albedo);
     plan.layers.push_back(std::move(one));
     plan.residual_is_layer = true;
-    plan.reach             = std::max(j.filter.r_max, 0);
+    plan.mask_reach        = std::max(j.filter.r_max, 0);
+    plan.reach             = plan.mask_reach;
+    // The residual's mask reads the residual, which the direct light's
+    // routing wrote from pixels further out.
+    if (std::any_of(args.begin(), args.end(), [](const LayerArg& a) { return a.direct; }))
+        plan.reach += route_reach();
     if (!residual_unfiltered.empty()) {
         std::string shown_unfiltered;
         plan.residual_unfiltered = select_sum(files, j.in.path,
@@ -349,7 +365,6 @@ route_direct_light(ImageBuf& quotient, const ImageBuf& colour,
                    ImageBuf& residual, const ImageBuf& beauty, const Job& j,
                    const std::string& name)
 {
-    constexpr int kPool = 8;
     ImageBuf direct, v_direct, v_beauty;
     const ROI all = quotient.roi();
     if (!ImageBufAlgo::mul(direct, quotient, colour, {}, j.threads)
@@ -409,9 +424,10 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
     const size_t given = plan.residual_is_layer ? n - 1 : n;
     for (size_t i = 0; i < n; ++i) {
         const LayersPlan::One& one = plan.layers[i];
-        // divide_through_specular() writes a lobe's light and colour, and
-        // the mask below the residual layer's albedo: copies of their own.
-        const bool read_only = one.diffuse < 0;
+        // divide_through_specular() writes a lobe's light and colour,
+        // route_direct_light() a direct layer's light, and the mask below
+        // the residual layer's albedo: copies of their own.
+        const bool read_only = one.diffuse < 0 && !one.direct;
         if (i < given)
             l.radiance[i] = strip.sum(one.radiance, read_only);
         l.albedo[i]         = strip.sum(one.albedo, i < given && read_only);
@@ -488,7 +504,7 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
     mask_negligible_residual(l.albedo[i], l.radiance[i],
                              beauty_float.initialized() ? beauty_float
                                                         : beauty,
-                             plan.reach, j.threads);
+                             plan.mask_reach, j.threads);
     return layers;
 }
 

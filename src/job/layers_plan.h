@@ -54,8 +54,12 @@ struct LayersPlan {
     /// these terms, added as they are (residual_unfiltered).
     bool residual_is_layer = false;
     std::vector<Selection> residual_unfiltered;
-    /// How far mask_negligible_residual() looks: rows a strip reads beyond
-    /// the filter's halo (0 without a residual layer).
+    /// How far mask_negligible_residual() looks (0 without a residual
+    /// layer).
+    int mask_reach = 0;
+    /// Rows a strip reads beyond the filter's halo: the mask's reach, and
+    /// with a direct layer also how far its routing looks
+    /// (route_direct_light()), which writes the residual the mask reads.
     int reach = 0;
 };
 
