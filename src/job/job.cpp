@@ -44,6 +44,32 @@ using OIIO::Strutil::fmt::format;
 
 namespace {
 
+/// Which layers job `j` filters, and whether it is layered (p.layered) and
+/// by path (p.path): the convention's direct layers in path mode, else the
+/// user's (--layer) or the convention's. Not the default yet: on ten
+/// scenes path mode is worse than beauty mode on some (docs/LAYERS.md
+/// "Light by path").
+const std::vector<LayerArg>&
+choose_layers(const Job& j, const Convention& conv, Plan& p)
+{
+    if (j.mode == Mode::Path && conv.direct_layers.empty())
+        fail(format("--mode path: '{}' has no direct light pass apart (Cycles' "
+                    "DiffDir with DiffCol and Denoising Albedo; docs/LAYERS.md)",
+                    j.in.path));
+    p.path = j.mode == Mode::Path;
+    const std::vector<LayerArg>& layer_args
+        = p.path ? conv.direct_layers
+                 : (j.layers.empty() ? conv.layers : j.layers);
+    if (j.mode == Mode::Layers && layer_args.empty())
+        fail(format("--mode layers: no layers found in '{}' (see "
+                    "docs/LAYERS.md); give them with --layer",
+                    j.in.path));
+    p.layered = p.path || j.mode == Mode::Layers
+                || (j.mode == Mode::Auto && !j.layers.empty());
+    return layer_args;
+}
+
+
 /// What -v says of the layers (or of their absence) and of the noise.
 void
 log_mode(const Job& j, const Convention& conv, const Plan& p,
@@ -93,22 +119,7 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
         apply_aux(j, files, aux, remodulation, result.log);
     apply_defaults(j, conv, result.log);
     apply_file_defaults(j, files);
-    if (j.mode == Mode::Path && conv.direct_layers.empty())
-        fail(format("--mode path: '{}' has no direct light pass apart (Cycles' "
-                    "DiffDir with DiffCol and Denoising Albedo; docs/LAYERS.md)",
-                    j.in.path));
-    // Not the default yet: on ten scenes it is worse than beauty mode on
-    // three (exterior_foliage up to 1.45x; docs/LAYERS.md "Light by path").
-    p.path = j.mode == Mode::Path;
-    const std::vector<LayerArg>& layer_args
-        = p.path ? conv.direct_layers
-                 : (j.layers.empty() ? conv.layers : j.layers);
-    if (j.mode == Mode::Layers && layer_args.empty())
-        fail(format("--mode layers: no layers found in '{}' (see "
-                    "docs/LAYERS.md); give them with --layer",
-                    j.in.path));
-    p.layered = p.path || j.mode == Mode::Layers
-                || (j.mode == Mode::Auto && !j.layers.empty());
+    const std::vector<LayerArg>& layer_args = choose_layers(j, conv, p);
     if (!p.layered && !j.albedo.given)
         fail(format("no albedo: '{}' has no Denoising Albedo pass; give "
                     "--albedo FILE or --aux FILE",
@@ -192,7 +203,12 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
         p.layers = plan_layers(
             files, j, layer_args, residual,
             own ? std::string() : conv.residual_albedo, conv.residual_layer,
-            own ? std::string() : conv.residual_unfiltered, p.noisy,
+            // Path mode keeps the environment in the residual, as beauty
+            // mode does: at a silhouette against the sky the residual's
+            // albedo holds the sky's, and without the sky's light the
+            // quotient there is neither's (glass_emitter 64 spp: its Env
+            // pixels' error 10x beauty mode's when added as it is).
+            own || p.path ? std::string() : conv.residual_unfiltered, p.noisy,
             result.log);
         if (j.aux.given)
             use_aux_colours(p.layers, files, j, layer_args, aux, p.noisy,

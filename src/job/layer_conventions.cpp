@@ -121,9 +121,17 @@ cycles_convention(const std::vector<std::string>& names,
     // with the indirect light in the residual layer, as in beauty mode.
     const std::string diff_dir = pass("DiffDir", "RGB");
     const std::string diff_col = pass("DiffCol", "RGB");
-    if (!diff_dir.empty() && !diff_col.empty() && !c.albedo.empty())
+    const std::string diff_ind = pass("DiffInd", "RGB");
+    if (!diff_dir.empty() && !diff_col.empty() && !c.albedo.empty()) {
         c.direct_layers.push_back({ prefix + "DiffDir", diff_dir, diff_col,
                                     true, false, "Diff", true });
+        // The diffuse indirect light over its own colour, not the residual's
+        // Denoising Albedo: at a leaf's silhouette against the sky that
+        // albedo holds the sky's, and the quotient is neither's light.
+        if (!diff_ind.empty())
+            c.direct_layers.push_back({ prefix + "DiffInd", diff_ind, diff_col,
+                                        true, false, "Diff", false });
+    }
     c.residual_albedo     = c.albedo;
     c.residual_layer      = prefix + "Residual";
     c.residual_unfiltered = pass("Env", "RGB");

@@ -133,6 +133,7 @@ plan_layers(InputFiles& files, const Job& j,
         one.divided   = a.divided;
         one.reflected = a.reflected;
         one.direct    = a.direct;
+        one.lobe      = a.lobe;
         one.radiance = select_sum(files, j.in.path, a.radiance, noisy,
                                   shown_radiance);
         one.albedo   = select_sum(files, j.in.path, a.albedo, noisy,
@@ -350,10 +351,25 @@ luminance_plane(const std::vector<float>& rgb)
 }
 
 
+/// The layer of the same lobe's indirect light (a divided layer of the
+/// lobe that is not direct), where the direct light `k` goes where it is
+/// not kept apart; -1: none (it goes to the residual).
+int
+indirect_partner(const LayersPlan& plan, size_t k)
+{
+    for (size_t m = 0; m < plan.layers.size(); ++m)
+        if (m != k && !plan.layers[m].direct && plan.layers[m].divided
+            && !plan.layers[m].lobe.empty() && plan.layers[m].lobe == plan.layers[k].lobe)
+            return int(m);
+    return -1;
+}
+
+
 /// Light by path keeps the direct light apart only where it is cleaner
 /// than the rest of the light: its relative noise, sqrt(V) over its level,
-/// both pooled over the 17x17 (V from noise_variance()), below the
-/// residual's.
+/// both pooled over the 17x17 (V from noise_variance()), below the rest's
+/// (the same lobe's indirect light over the same colour when there is such
+/// a layer, `partner`; else the residual).
 /// Elsewhere (a sky's light through a window, found by few samples)
 /// splitting leaves two noisier images to filter instead of one, and the
 /// direct light goes back to the residual. The share kept apart is that
@@ -362,17 +378,20 @@ luminance_plane(const std::vector<float>& rgb)
 /// the residual.
 void
 route_direct_light(ImageBuf& quotient, const ImageBuf& colour,
-                   ImageBuf& residual, const ImageBuf& beauty, const Job& j,
+                   ImageBuf& residual, ImageBuf* partner, const Job& j,
                    const std::string& name)
 {
-    ImageBuf direct, v_direct, v_beauty;
+    ImageBuf direct, rest, v_direct, v_beauty;
     const ROI all = quotient.roi();
     if (!ImageBufAlgo::mul(direct, quotient, colour, {}, j.threads)
+        || (partner && !ImageBufAlgo::mul(rest, *partner, colour, {}, j.threads))
         || !noise_variance(v_direct, direct, {}, all, all, j.threads)
-        || !noise_variance(v_beauty, residual, {}, all, all, j.threads))
+        || !noise_variance(v_beauty, partner ? rest : residual, {}, all, all,
+                           j.threads))
         fail(format("layer '{}' of '{}': {}", name, j.in.path,
                     one_line(direct.geterror() + v_direct.geterror()
                              + v_beauty.geterror())));
+    ImageBuf& target = partner ? *partner : residual;
     const int w = all.width(), h = all.height();
     const size_t n = size_t(w) * size_t(h);
     ROI rgb    = all;
@@ -383,9 +402,9 @@ route_direct_light(ImageBuf& quotient, const ImageBuf& colour,
     one.chend   = 1;
     std::vector<float> d(3 * n), b(3 * n), q(3 * n), r(3 * n), vd(n), vb(n);
     direct.get_pixels(rgb, TypeFloat, d.data());
-    residual.get_pixels(rgb, TypeFloat, b.data());
+    (partner ? rest : residual).get_pixels(rgb, TypeFloat, b.data());
     quotient.get_pixels(rgb, TypeFloat, q.data());
-    residual.get_pixels(rgb, TypeFloat, r.data());
+    target.get_pixels(rgb, TypeFloat, r.data());
     v_direct.get_pixels(one, TypeFloat, vd.data());
     v_beauty.get_pixels(one, TypeFloat, vb.data());
     const std::vector<float> yd = box_mean(luminance_plane(d), w, h, kPool);
@@ -396,13 +415,16 @@ route_direct_light(ImageBuf& quotient, const ImageBuf& colour,
     for (size_t i = 0; i < n; ++i)
         cleaner[i] = pd[i] * yb[i] * yb[i] < pb[i] * yd[i] * yd[i] ? 1.0f : 0.0f;
     const std::vector<float> share = box_mean(cleaner, w, h, kPool);
+    // Into the partner as the quotient it is (the same colour divides
+    // both), into the residual as light.
+    const std::vector<float>& moved = partner ? q : d;
     for (size_t i = 0; i < n; ++i)
         for (int c = 0; c < 3; ++c) {
-            r[3 * i + size_t(c)] += (1.0f - share[i]) * d[3 * i + size_t(c)];
+            r[3 * i + size_t(c)] += (1.0f - share[i]) * moved[3 * i + size_t(c)];
             q[3 * i + size_t(c)] *= share[i];
         }
     quotient.set_pixels(rgb, TypeFloat, q.data());
-    residual.set_pixels(rgb, TypeFloat, r.data());
+    target.set_pixels(rgb, TypeFloat, r.data());
 }
 
 }  // namespace
@@ -427,7 +449,12 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
         // divide_through_specular() writes a lobe's light and colour,
         // route_direct_light() a direct layer's light, and the mask below
         // the residual layer's albedo: copies of their own.
-        const bool read_only = one.diffuse < 0 && !one.direct;
+        const bool read_only = one.diffuse < 0 && !one.direct
+                               && !std::any_of(plan.layers.begin(), plan.layers.end(),
+                                               [&](const LayersPlan::One& o) {
+                                                   return o.direct && !one.lobe.empty()
+                                                          && o.lobe == one.lobe;
+                                               });
         if (i < given)
             l.radiance[i] = strip.sum(one.radiance, read_only);
         l.albedo[i]         = strip.sum(one.albedo, i < given && read_only);
@@ -494,9 +521,12 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
                                     l.albedo[i], j.filter.albedo_eps,
                                     j.threads);
     for (size_t k = 0; k < given; ++k)
-        if (plan.layers[k].direct)
-            route_direct_light(l.radiance[k], l.albedo[k], l.radiance[i], beauty,
-                               j, plan.layers[k].name);
+        if (plan.layers[k].direct) {
+            const int m = indirect_partner(plan, k);
+            route_direct_light(l.radiance[k], l.albedo[k], l.radiance[i],
+                               m >= 0 ? &l.radiance[size_t(m)] : nullptr, j,
+                               plan.layers[k].name);
+        }
     // The mask reads float images; the beauty may be the file's half rows.
     const ImageBuf beauty_float = beauty.spec().format == TypeFloat
                                       ? ImageBuf()

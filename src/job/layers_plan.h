@@ -35,6 +35,8 @@ struct LayersPlan {
         bool divided = false, reflected = false;
         /// Direct light (zdenoise::Layer::direct).
         bool direct = false;
+        /// The lobe a convention found it as (LayerArg::lobe).
+        std::string lobe;
         /// Samples a pixel of its colour, the render's own AOV, which
         /// load_layers() prefilters (plan_layer_colours()); 0: as it is.
         int prefilter = 0;
