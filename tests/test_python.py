@@ -451,7 +451,7 @@ class Files(unittest.TestCase):
         # errors), TypeError for a value of no option's type.
         for options, message in [
             (dict(eta="x"), '"eta" must be a number, not "x"'),
-            (dict(mode="lobes"), '"mode" must be "beauty" or "layers", not "lobes"'),
+            (dict(mode="lobes"), '"mode" must be "beauty", "layers" or "path", not "lobes"'),
             (dict(halves=(SAMPLE,)), '"halves" must be a list of two inputs, not'),
             (dict(tile=-1), '"tile" must be 0 (automatic) or a number of rows, not -1'),
             (dict(frames="1-10"), 'unknown key "frames" (known: albedo, aux, '),

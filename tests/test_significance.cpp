@@ -10,7 +10,9 @@
 // layered_denoise() keeps a 1-px shadow line that the regression filter
 // alone fills in.
 
+#include <array>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -409,4 +411,41 @@ TEST_F(PathCli, ThinShadowLinesAreKeptWhileTheBounceLightIsSmoothed)
     const double e_noisy = synth::rel_mse(noisy, clean), e_path = synth::rel_mse(out, clean);
     EXPECT_LT(e_path * 10.0, e_noisy);
     EXPECT_LT(e_path, synth::rel_mse(beauty, clean));
+}
+
+
+TEST(Significance, BadValuesPassThroughAndDoNotSpread)
+{
+    // NaN, infinities, an overflowed 1e30 and negative light: a bad pixel
+    // comes out as it came in, and no finite pixel takes a non-finite value.
+    ImageBuf in = noisy_sunlit(0.05f);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float inf = std::numeric_limits<float>::infinity();
+    const std::vector<std::array<float, 3>> bad = {
+        { nan, 1.0f, 1.0f }, { inf, inf, inf }, { -inf, 0.0f, 0.0f }, { 1e30f, 1e30f, 1e30f },
+        { -2.0f, -2.0f, -2.0f }
+    };
+    for (size_t k = 0; k < bad.size(); ++k)
+        in.setpixel(8 + 6 * int(k), 30, bad[k].data(), 3);
+    const ImageBuf smoothed = box_smoothed(in);
+    for (const ImageBuf& out : { zdenoise::significance_filter(in),
+                                 zdenoise::keep_structure(in, smoothed) }) {
+        ASSERT_FALSE(out.has_error()) << out.geterror();
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                float o[3], i[3];
+                out.getpixel(x, y, o, 3);
+                in.getpixel(x, y, i, 3);
+                const bool finite_in = std::isfinite(i[0]) && std::isfinite(i[1])
+                                       && std::isfinite(i[2]);
+                if (finite_in && std::fabs(i[0]) < 1e20f)
+                    for (int c = 0; c < 3; ++c)
+                        ASSERT_TRUE(std::isfinite(o[c])) << x << "," << y;
+            }
+    }
+    ImageBuf v;
+    ASSERT_TRUE(zdenoise::noise_variance(v, in));
+    float at_nan;
+    v.getpixel(8, 30, &at_nan, 1);
+    EXPECT_TRUE(std::isnan(at_nan)) << "no noise is estimated for a non-finite pixel";
 }

@@ -355,11 +355,14 @@ ZDENOISE_API ImageBuf significance_filter(const ImageBuf& light,
                                           int nthreads = 0);
 
 /// Keep the structure a smoother removed (docs/FILTER.md section 14): where
-/// `smoothed` departs from `light` beyond the noise of light (the mean over
-/// the 3x3 of (y - y_smoothed)^2 / V above 2.41, the 99 % quantile of
-/// chi-square with 9 degrees of freedom over 9), the result is
-/// significance_filter()'s; elsewhere it is `smoothed`. Where V is 0 (no
-/// noise) and smoothed differs, that is `light` itself. Parameters as for
+/// `smoothed` departs from `light` beyond the noise of light around the
+/// pixel (the mean over its 8 neighbours on its surface of
+/// (y - y_smoothed)^2 / V above 3.265, the 99.9 % quantile of chi-square
+/// with 8 degrees of freedom over 8; the pixel's own departure is left out,
+/// so that a lone firefly the smoother removed stays removed), the result
+/// is significance_filter()'s; elsewhere it is `smoothed`. Where V is 0
+/// (no noise) and smoothed differs, that is `light` itself; where smoothed
+/// is not finite and light is, the significance filter. Parameters as for
 /// significance_filter(); `smoothed` must cover roi widened by 1 (clipped
 /// to the frame): the test at roi's border reads it. If `kept` is not null,
 /// it receives the number of pixels of roi that took the significance

@@ -126,7 +126,7 @@ parse_value(const job::Option& option, const std::string& opt,
     case Kind::Mode: {
         const std::string mode = value();
         if (!job::parse_mode(mode, c.job.mode))
-            fail(format("--mode: unknown mode '{}' (known: layers, beauty)",
+            fail(format("--mode: unknown mode '{}' (known: beauty, layers, path)",
                         mode),
                  kExitUsage);
         break;

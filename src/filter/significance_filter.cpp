@@ -462,7 +462,11 @@ keep_structure(ImageBuf& dst, const ImageBuf& light, const ImageBuf& smoothed,
         for (int x = roi.xbegin; x < roi.xend; ++x) {
             float* o = &out[3 * (size_t(y_ - roi.ybegin) * rw + size_t(x - roi.xbegin))];
             const float t = residual_statistic(p, s_y, x, y_);
-            if (!(t > kResidualLevel)) {
+            // A smoother's non-finite value never passes where the light
+            // is finite: the significance filter takes its place.
+            const bool broken = !std::isfinite(s_y[p.index(x, y_)])
+                                && std::isfinite(p.y[p.index(x, y_)]);
+            if (!(t > kResidualLevel) && !broken) {
                 // The smoother's residual is noise: keep its result.
                 std::copy(&s_rgb[at_around(x, y_)], &s_rgb[at_around(x, y_)] + 3, o);
                 continue;

@@ -322,7 +322,7 @@ parse_option(const Option& option, const json& value, const Source& source,
                    : parse_data_type(
                        text, std::get<Field<TypeDesc>>(option.field)(command))))
             fail(format("\"{}\" must be {}, not {}", key,
-                        mode ? "\"beauty\" or \"layers\""
+                        mode ? "\"beauty\", \"layers\" or \"path\""
                              : "\"half\" or \"float\"",
                         shown(value)));
         break;
