@@ -282,10 +282,11 @@ significant_mean(const LightPlane& p, int x, int y_, float* out)
 
 
 /// The mean over the 8 neighbours on the pixel's surface of
-/// (y - y_smoothed)^2 / V; NaN where no term has a known V. Not the pixel's own: structure the input shows holds
-/// in more than one pixel (a 1-px line has two of its pixels among any of
-/// its pixels' neighbours, an edge three), while a lone outlier (a firefly,
-/// which the smoother rightly removed) does not make its own case.
+/// (y - y_smoothed)^2 / V; NaN where no term has a known V. Not the pixel's
+/// own: structure the input shows holds in more than one pixel (a 1-px line
+/// has two of its pixels among any of its pixels' neighbours, an edge
+/// three), while a lone outlier (a firefly, which the smoother rightly
+/// removed) does not make its own case.
 float
 residual_statistic(const LightPlane& p, const std::vector<float>& smoothed_y,
                    int x, int y_)
@@ -309,37 +310,45 @@ residual_statistic(const LightPlane& p, const std::vector<float>& smoothed_y,
 }
 
 
-/// Check the arguments common to both operations, set roi and the region
-/// of the frame they read; decode the light and estimate its noise.
+/// Check the arguments common to the three operations, set roi and frame
+/// (by default the light's data window), decode the light over roi widened
+/// by `halo` and estimate its noise; make dst a float result of `nch`
+/// channels over roi.
 bool
 prepare(ImageBuf& dst, const ImageBuf& light, const Guides& guides,
-        ROI& frame, ROI& roi, LightPlane& p, const char* opname, int nthreads)
+        ROI& frame, ROI& roi, int halo, int nch, LightPlane& p,
+        const char* opname, int nthreads)
 {
-    if (!prepare_dst(dst, light, roi, opname)
-        || !check_input(dst, light, opname, "light", roi, 3))
+    if (!light.initialized()) {
+        dst.errorfmt("{}: input image is not initialized", opname);
         return false;
+    }
+    if (!roi.defined())
+        roi = light.roi();
     if (!frame.defined())
         frame = light.roi();
-    if (!check_frame(dst, opname, roi, frame))
+    if (!check_input(dst, light, opname, "light", roi, 3)
+        || !check_frame(dst, opname, roi, frame))
         return false;
-    const ROI need = halo_region(roi, frame, significance_halo());
+    const ROI need = halo_region(roi, frame, halo);
     if (!check_input(dst, light, opname, "light", need, 3)
-        || !check_guides(dst, guides, opname, need))
-        return false;
-    if (!decode_light(p, dst, light, guides, need, opname))
+        || !check_guides(dst, guides, opname, need)
+        || !decode_light(p, dst, light, guides, need, opname))
         return false;
     estimate_variance(p, nthreads);
-    return prepare_result(dst, dst, roi, frame, 3, opname, "dst");
+    return prepare_result(dst, dst, roi, frame, nch, opname, "dst");
 }
 
 
+/// Channels 0 .. nch - 1 of dst over roi from `values` (nch a pixel).
 bool
-write_rgb(ImageBuf& dst, const ROI& roi, const std::vector<float>& rgb)
+write_channels(ImageBuf& dst, const ROI& roi, int nch,
+               const std::vector<float>& values)
 {
     ROI r    = roi;
     r.chbegin = 0;
-    r.chend   = 3;
-    return dst.set_pixels(r, TypeFloat, rgb.data());
+    r.chend   = nch;
+    return dst.set_pixels(r, TypeFloat, values.data());
 }
 
 }  // namespace
@@ -358,36 +367,16 @@ noise_variance(ImageBuf& dst, const ImageBuf& light, const Guides& guides,
                ROI frame, ROI roi, int nthreads)
 {
     const char* opname = "noise_variance";
-    if (!light.initialized()) {
-        dst.errorfmt("{}: input image is not initialized", opname);
-        return false;
-    }
-    if (!roi.defined())
-        roi = light.roi();
-    if (!frame.defined())
-        frame = light.roi();
-    if (!check_input(dst, light, opname, "light", roi, 3)
-        || !check_frame(dst, opname, roi, frame))
-        return false;
-    const ROI need = halo_region(roi, frame, noise_variance_halo());
-    if (!check_input(dst, light, opname, "light", need, 3)
-        || !check_guides(dst, guides, opname, need))
-        return false;
     LightPlane p;
-    if (!decode_light(p, dst, light, guides, need, opname))
-        return false;
-    estimate_variance(p, nthreads);
-    if (!prepare_result(dst, dst, roi, frame, 1, opname, "dst"))
+    if (!prepare(dst, light, guides, frame, roi, noise_variance_halo(), 1, p,
+                 opname, nthreads))
         return false;
     std::vector<float> out(roi.npixels());
     for (int y_ = roi.ybegin; y_ < roi.yend; ++y_)
         for (int x = roi.xbegin; x < roi.xend; ++x)
             out[size_t(y_ - roi.ybegin) * size_t(roi.width())
                 + size_t(x - roi.xbegin)] = p.var[p.index(x, y_)];
-    ROI r1    = roi;
-    r1.chbegin = 0;
-    r1.chend   = 1;
-    return dst.set_pixels(r1, TypeFloat, out.data());
+    return write_channels(dst, roi, 1, out);
 }
 
 
@@ -405,7 +394,8 @@ significance_filter(ImageBuf& dst, const ImageBuf& light, const Guides& guides,
 {
     const char* opname = "significance_filter";
     LightPlane p;
-    if (!prepare(dst, light, guides, frame, roi, p, opname, nthreads))
+    if (!prepare(dst, light, guides, frame, roi, significance_halo(), 3, p,
+                 opname, nthreads))
         return false;
     std::vector<float> out(3 * roi.npixels());
     for_rows(roi, nthreads, [&](int y_) {
@@ -414,7 +404,7 @@ significance_filter(ImageBuf& dst, const ImageBuf& light, const Guides& guides,
                              &out[3 * (size_t(y_ - roi.ybegin) * size_t(roi.width())
                                        + size_t(x - roi.xbegin))]);
     });
-    return write_rgb(dst, roi, out);
+    return write_channels(dst, roi, 3, out);
 }
 
 
@@ -424,6 +414,10 @@ keep_structure(ImageBuf& dst, const ImageBuf& light, const ImageBuf& smoothed,
                int nthreads)
 {
     const char* opname = "keep_structure";
+    if (!light.initialized()) {
+        dst.errorfmt("{}: input image is not initialized", opname);
+        return false;
+    }
     if (!roi.defined())
         roi = light.roi();
     if (!frame.defined())
@@ -441,7 +435,8 @@ keep_structure(ImageBuf& dst, const ImageBuf& light, const ImageBuf& smoothed,
         return false;
     }
     LightPlane p;
-    if (!prepare(dst, light, guides, frame, roi, p, opname, nthreads))
+    if (!prepare(dst, light, guides, frame, roi, significance_halo(), 3, p,
+                 opname, nthreads))
         return false;
     // The smoother's luminance on the light's grid (NaN beyond `around`).
     std::vector<float> s_y(p.region.npixels(), kNaN);
@@ -480,7 +475,7 @@ keep_structure(ImageBuf& dst, const ImageBuf& light, const ImageBuf& smoothed,
         for (int64_t k : row_kept)
             *kept += k;
     }
-    return write_rgb(dst, roi, out);
+    return write_channels(dst, roi, 3, out);
 }
 
 ImageBuf
