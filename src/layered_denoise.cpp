@@ -49,17 +49,24 @@ clamp_negative(ImageBuf& img, ROI roi, int nthreads)
 }
 
 
-/// A direct layer's structure (keep_structure()): `filtered` (over roi
-/// widened by 1) takes, in roi, the significance filter of `light` where it
-/// smoothed more than the noise; counted in stats.
+/// A direct layer's quotient filtered: the regression filter over roi
+/// widened by 1 (keep_structure()'s test at roi's border reads it), then
+/// keep_structure() in roi. The filter's window statistics would count that
+/// ring, which depends on how the frame is cut: only the kept pixels are
+/// counted.
 bool
-keep_direct_structure(ImageBuf& filtered, const ImageBuf& light,
-                      const Guides& guides, const ROI& frame,
-                      FilterStats* stats, ROI roi, int nthreads)
+filter_direct(ImageBuf& filtered, const ImageBuf& quotient,
+              const ImageBuf& albedo, const Guides& guides,
+              const FilterOptions& options, FilterStats* stats, ROI roi,
+              int nthreads)
 {
     int64_t kept = 0;
-    if (!keep_structure(filtered, light, filtered, guides, frame, &kept, roi,
-                        nthreads))
+    if (!regression_filter(filtered, quotient, albedo, guides, options,
+                           nullptr,
+                           detail::halo_region(roi, options.frame, 1),
+                           nthreads)
+        || !keep_structure(filtered, quotient, filtered, guides, options.frame,
+                           &kept, roi, nthreads))
         return false;
     if (stats)
         stats->kept_pixels += kept;
@@ -67,32 +74,49 @@ keep_direct_structure(ImageBuf& filtered, const ImageBuf& light,
 }
 
 
-/// keep_direct_structure() on a layer of radiance: the test and the
-/// significance filter see its light (the radiance over its albedo, as the
-/// regression filter does), so that texture is not taken for structure;
-/// `denoised` (over roi widened by 1) is remodulated in roi.
+/// A layer's quotient filtered in roi into `filtered`: filter_direct() for
+/// a direct layer, else the regression filter.
 bool
-keep_radiance_structure(ImageBuf& denoised, const ImageBuf& radiance,
-                        const ImageBuf& albedo, const Guides& guides,
-                        const FilterOptions& options, FilterStats* stats,
-                        ROI roi, int nthreads)
+filter_quotient(ImageBuf& filtered, const Layer& layer,
+                const ImageBuf& quotient, const Guides& guides,
+                const FilterOptions& options, FilterStats* stats, ROI roi,
+                int nthreads)
 {
-    const ROI around = detail::halo_region(roi, options.frame,
-                                           significance_halo() + 1);
-    ImageBuf light, smoothed;
-    if (!demodulate(light, radiance, albedo, options.albedo_eps, around,
-                    nthreads)
-        || !demodulate(smoothed, denoised, albedo, options.albedo_eps,
-                       denoised.roi(), nthreads)
-        || !keep_direct_structure(smoothed, light, guides, options.frame,
-                                  stats, roi, nthreads)
-        || !remodulate(denoised, smoothed, albedo, options.albedo_eps, roi,
-                       nthreads)) {
-        denoised.errorfmt("{}", light.has_error() ? light.geterror()
-                                                  : smoothed.geterror());
+    return layer.direct
+               ? filter_direct(filtered, quotient, *layer.albedo, guides,
+                               options, stats, roi, nthreads)
+               : regression_filter(filtered, quotient, *layer.albedo, guides,
+                                   options, stats, roi, nthreads);
+}
+
+
+/// A direct layer of radiance (not divided): demodulated, filtered as its
+/// quotient (filter_direct()), remodulated as denoise() does, so that the
+/// test and the significance filter see its light and not its texture.
+bool
+denoise_direct_radiance(ImageBuf& out, const Layer& layer,
+                        const Guides& guides, const FilterOptions& options,
+                        FilterStats* stats, ROI roi, int nthreads)
+{
+    const ROI region = detail::halo_region(roi, options.frame,
+                                           filter_halo(options) + 1);
+    ImageBuf quotient, filtered;
+    if (!demodulate(quotient, *layer.radiance, *layer.albedo,
+                    options.albedo_eps, region, nthreads)) {
+        out.errorfmt("{}", quotient.geterror());
         return false;
     }
-    return true;
+    if (!filter_direct(filtered, quotient, *layer.albedo, guides, options,
+                       stats, roi, nthreads)) {
+        out.errorfmt("{}", filtered.geterror());
+        return false;
+    }
+    return layer.remodulation_albedo
+               ? remodulate(out, filtered, *layer.albedo,
+                            *layer.remodulation_albedo, options.albedo_eps,
+                            roi, nthreads)
+               : remodulate(out, filtered, *layer.albedo, options.albedo_eps,
+                            roi, nthreads);
 }
 
 
@@ -110,25 +134,17 @@ denoise_layer(ImageBuf& dst, const Layer& layer, const Guides& shared,
         options.edge_k *= kReflectedEdgeScale;
     contribution = &out;
     bool ok             = true;
-    // A direct layer is filtered one pixel beyond roi: keep_structure()'s
-    // test at roi's border reads it. Its window statistics would count that
-    // ring, which depends on how the frame is cut: only its kept pixels
-    // are counted.
-    const bool direct   = layer.direct && layer.filter;
-    const ROI filtered_roi = direct ? detail::halo_region(roi, options.frame, 1)
-                                    : roi;
     if (!layer.divided) {
         if (!layer.filter) {
             contribution = layer.radiance;
             return true;
         }
-        ok = denoise(out, *layer.radiance, *layer.albedo,
-                     layer.remodulation_albedo, guides, options,
-                     direct ? nullptr : stats, filtered_roi, nthreads)
-             && (!direct
-                 || keep_radiance_structure(out, *layer.radiance,
-                                            *layer.albedo, guides, options,
-                                            stats, roi, nthreads))
+        ok = (layer.direct
+                  ? denoise_direct_radiance(out, layer, guides, options,
+                                            stats, roi, nthreads)
+                  : denoise(out, *layer.radiance, *layer.albedo,
+                            layer.remodulation_albedo, guides, options,
+                            stats, roi, nthreads))
              && clamp_negative(out, roi, nthreads);
     } else {
         // Already the quotient: filter it as it is, then compose it as the
@@ -137,13 +153,8 @@ denoise_layer(ImageBuf& dst, const Layer& layer, const Guides& shared,
         const ImageBuf* quotient = layer.radiance;
         ImageBuf filtered;
         if (layer.filter) {
-            if (!regression_filter(filtered, *layer.radiance, *layer.albedo,
-                                   guides, options, direct ? nullptr : stats,
-                                   filtered_roi, nthreads)
-                || (direct
-                    && !keep_direct_structure(filtered, *layer.radiance,
-                                              guides, options.frame, stats,
-                                              roi, nthreads))) {
+            if (!filter_quotient(filtered, layer, *layer.radiance, guides,
+                                 options, stats, roi, nthreads)) {
                 dst.errorfmt("layered_denoise: layer '{}': {}", layer.name,
                              filtered.geterror());
                 return false;
