@@ -44,32 +44,6 @@ using OIIO::Strutil::fmt::format;
 
 namespace {
 
-/// Which layers job `j` filters, and whether it is layered (p.layered) and
-/// by path (p.path): the convention's direct layers in path mode, else the
-/// user's (--layer) or the convention's. Not the default yet: on ten
-/// scenes path mode is worse than beauty mode on some (docs/LAYERS.md
-/// "Light by path").
-const std::vector<LayerArg>&
-choose_layers(const Job& j, const Convention& conv, Plan& p)
-{
-    if (j.mode == Mode::Path && conv.direct_layers.empty())
-        fail(format("--mode path: '{}' has no direct light pass apart (Cycles' "
-                    "DiffDir with DiffCol and Denoising Albedo; docs/LAYERS.md)",
-                    j.in.path));
-    p.path = j.mode == Mode::Path;
-    const std::vector<LayerArg>& layer_args
-        = p.path ? conv.direct_layers
-                 : (j.layers.empty() ? conv.layers : j.layers);
-    if (j.mode == Mode::Layers && layer_args.empty())
-        fail(format("--mode layers: no layers found in '{}' (see "
-                    "docs/LAYERS.md); give them with --layer",
-                    j.in.path));
-    p.layered = p.path || j.mode == Mode::Layers
-                || (j.mode == Mode::Auto && !j.layers.empty());
-    return layer_args;
-}
-
-
 /// What -v says of the layers (or of their absence) and of the noise.
 void
 log_mode(const Job& j, const Convention& conv, const Plan& p,
@@ -119,7 +93,8 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
         apply_aux(j, files, aux, remodulation, result.log);
     apply_defaults(j, conv, result.log);
     apply_file_defaults(j, files);
-    const std::vector<LayerArg>& layer_args = choose_layers(j, conv, p);
+    const std::vector<LayerArg>& layer_args = choose_layers(j, conv, p.path,
+                                                            p.layered);
     if (!p.layered && !j.albedo.given)
         fail(format("no albedo: '{}' has no Denoising Albedo pass; give "
                     "--albedo FILE or --aux FILE",

@@ -109,7 +109,43 @@ mask_negligible_residual(ImageBuf& albedo, const ImageBuf& residual,
         });
 }
 
+
+/// Each direct layer's partner: the same lobe's indirect light, a divided
+/// layer of the lobe that is not direct (LayersPlan::One::partner).
+void
+pair_direct_layers(LayersPlan& plan, const std::vector<LayerArg>& args)
+{
+    for (size_t k = 0; k < args.size(); ++k)
+        for (size_t m = 0; args[k].direct && m < args.size(); ++m)
+            if (!args[m].direct && args[m].divided && !args[m].lobe.empty()
+                && args[m].lobe == args[k].lobe) {
+                plan.layers[k].partner      = int(m);
+                plan.layers[m].takes_direct = true;
+                break;
+            }
+}
+
 }  // namespace
+
+
+const std::vector<LayerArg>&
+choose_layers(const Job& j, const Convention& conv, bool& path, bool& layered)
+{
+    if (j.mode == Mode::Path && conv.direct_layers.empty())
+        fail(format("--mode path: '{}' has no direct light pass apart (Cycles' "
+                    "DiffDir with DiffCol and Denoising Albedo; docs/LAYERS.md)",
+                    j.in.path));
+    path = j.mode == Mode::Path;
+    const std::vector<LayerArg>& layer_args
+        = path ? conv.direct_layers : (j.layers.empty() ? conv.layers : j.layers);
+    if (j.mode == Mode::Layers && layer_args.empty())
+        fail(format("--mode layers: no layers found in '{}' (see "
+                    "docs/LAYERS.md); give them with --layer",
+                    j.in.path));
+    layered = path || j.mode == Mode::Layers
+              || (j.mode == Mode::Auto && !j.layers.empty());
+    return layer_args;
+}
 
 
 /// Choose the layers and the residual; the residual is, unless selected,
@@ -133,7 +169,6 @@ plan_layers(InputFiles& files, const Job& j,
         one.divided   = a.divided;
         one.reflected = a.reflected;
         one.direct    = a.direct;
-        one.lobe      = a.lobe;
         one.radiance = select_sum(files, j.in.path, a.radiance, noisy,
                                   shown_radiance);
         one.albedo   = select_sum(files, j.in.path, a.albedo, noisy,
@@ -148,6 +183,7 @@ plan_layers(InputFiles& files, const Job& j,
                                         "kept)"
                                       : ""));
     }
+    pair_direct_layers(plan, args);
     std::string shown_residual = "the beauty minus the layers";
     if (!residual.empty()) {
         shown_residual.clear();
@@ -308,7 +344,6 @@ divide_through_specular(ImageBuf& radiance, ImageBuf& colour,
 }
 
 
-
 /// The mean of `v` over the (2 r + 1)^2 box around each pixel (over what
 /// lies in the image and is finite), rows then columns.
 std::vector<float>
@@ -351,46 +386,31 @@ luminance_plane(const std::vector<float>& rgb)
 }
 
 
-/// The layer of the same lobe's indirect light (a divided layer of the
-/// lobe that is not direct), where the direct light `k` goes where it is
-/// not kept apart; -1: none (it goes to the residual).
-int
-indirect_partner(const LayersPlan& plan, size_t k)
-{
-    for (size_t m = 0; m < plan.layers.size(); ++m)
-        if (m != k && !plan.layers[m].direct && plan.layers[m].divided
-            && !plan.layers[m].lobe.empty() && plan.layers[m].lobe == plan.layers[k].lobe)
-            return int(m);
-    return -1;
-}
-
-
 /// Light by path keeps the direct light apart only where it is cleaner
 /// than the rest of the light: its relative noise, sqrt(V) over its level,
-/// both pooled over the 17x17 (V from noise_variance()), below the rest's
-/// (the same lobe's indirect light over the same colour when there is such
-/// a layer, `partner`; else the residual).
-/// Elsewhere (a sky's light through a window, found by few samples)
-/// splitting leaves two noisier images to filter instead of one, and the
-/// direct light goes back to the residual. The share kept apart is that
-/// decision's 17x17 mean, so that neither image takes a seam where it
-/// changes: the quotient is scaled by it, the rest of the light added to
-/// the residual.
+/// both pooled over the 17x17 (V from noise_variance()), below the rest's.
+/// The rest is the same lobe's indirect light over the same colour when
+/// there is such a layer (`partner`), else the residual. Elsewhere (a
+/// sky's light through a window, found by few samples) splitting leaves two
+/// noisier images to filter instead of one, and the direct light goes to
+/// the rest. The share kept apart is that decision's 17x17 mean, so that
+/// neither image takes a seam where it changes: the direct quotient is
+/// scaled by it, and what it loses is added to the rest.
 void
 route_direct_light(ImageBuf& quotient, const ImageBuf& colour,
                    ImageBuf& residual, ImageBuf* partner, const Job& j,
                    const std::string& name)
 {
-    ImageBuf direct, rest, v_direct, v_beauty;
+    ImageBuf direct, rest, v_direct, v_rest;
     const ROI all = quotient.roi();
     if (!ImageBufAlgo::mul(direct, quotient, colour, {}, j.threads)
         || (partner && !ImageBufAlgo::mul(rest, *partner, colour, {}, j.threads))
         || !noise_variance(v_direct, direct, {}, all, all, j.threads)
-        || !noise_variance(v_beauty, partner ? rest : residual, {}, all, all,
+        || !noise_variance(v_rest, partner ? rest : residual, {}, all, all,
                            j.threads))
         fail(format("layer '{}' of '{}': {}", name, j.in.path,
                     one_line(direct.geterror() + v_direct.geterror()
-                             + v_beauty.geterror())));
+                             + v_rest.geterror())));
     ImageBuf& target = partner ? *partner : residual;
     const int w = all.width(), h = all.height();
     const size_t n = size_t(w) * size_t(h);
@@ -400,20 +420,20 @@ route_direct_light(ImageBuf& quotient, const ImageBuf& colour,
     ROI one    = all;
     one.chbegin = 0;
     one.chend   = 1;
-    std::vector<float> d(3 * n), b(3 * n), q(3 * n), r(3 * n), vd(n), vb(n);
+    std::vector<float> d(3 * n), o(3 * n), q(3 * n), r(3 * n), vd(n), vo(n);
     direct.get_pixels(rgb, TypeFloat, d.data());
-    (partner ? rest : residual).get_pixels(rgb, TypeFloat, b.data());
+    (partner ? rest : residual).get_pixels(rgb, TypeFloat, o.data());
     quotient.get_pixels(rgb, TypeFloat, q.data());
     target.get_pixels(rgb, TypeFloat, r.data());
     v_direct.get_pixels(one, TypeFloat, vd.data());
-    v_beauty.get_pixels(one, TypeFloat, vb.data());
+    v_rest.get_pixels(one, TypeFloat, vo.data());
     const std::vector<float> yd = box_mean(luminance_plane(d), w, h, kPool);
-    const std::vector<float> yb = box_mean(luminance_plane(b), w, h, kPool);
+    const std::vector<float> yo = box_mean(luminance_plane(o), w, h, kPool);
     const std::vector<float> pd = box_mean(vd, w, h, kPool);
-    const std::vector<float> pb = box_mean(vb, w, h, kPool);
+    const std::vector<float> po = box_mean(vo, w, h, kPool);
     std::vector<float> cleaner(n);
     for (size_t i = 0; i < n; ++i)
-        cleaner[i] = pd[i] * yb[i] * yb[i] < pb[i] * yd[i] * yd[i] ? 1.0f : 0.0f;
+        cleaner[i] = pd[i] * yo[i] * yo[i] < po[i] * yd[i] * yd[i] ? 1.0f : 0.0f;
     const std::vector<float> share = box_mean(cleaner, w, h, kPool);
     // Into the partner as the quotient it is (the same colour divides
     // both), into the residual as light.
@@ -447,14 +467,10 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
     for (size_t i = 0; i < n; ++i) {
         const LayersPlan::One& one = plan.layers[i];
         // divide_through_specular() writes a lobe's light and colour,
-        // route_direct_light() a direct layer's light, and the mask below
-        // the residual layer's albedo: copies of their own.
-        const bool read_only = one.diffuse < 0 && !one.direct
-                               && !std::any_of(plan.layers.begin(), plan.layers.end(),
-                                               [&](const LayersPlan::One& o) {
-                                                   return o.direct && !one.lobe.empty()
-                                                          && o.lobe == one.lobe;
-                                               });
+        // route_direct_light() a direct layer's light and its partner's,
+        // and the mask below the residual layer's albedo: copies of their
+        // own.
+        const bool read_only = one.diffuse < 0 && !one.direct && !one.takes_direct;
         if (i < given)
             l.radiance[i] = strip.sum(one.radiance, read_only);
         l.albedo[i]         = strip.sum(one.albedo, i < given && read_only);
@@ -522,7 +538,7 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
                                     j.threads);
     for (size_t k = 0; k < given; ++k)
         if (plan.layers[k].direct) {
-            const int m = indirect_partner(plan, k);
+            const int m = plan.layers[k].partner;
             route_direct_light(l.radiance[k], l.albedo[k], l.radiance[i],
                                m >= 0 ? &l.radiance[size_t(m)] : nullptr, j,
                                plan.layers[k].name);

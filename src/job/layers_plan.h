@@ -35,8 +35,14 @@ struct LayersPlan {
         bool divided = false, reflected = false;
         /// Direct light (zdenoise::Layer::direct).
         bool direct = false;
-        /// The lobe a convention found it as (LayerArg::lobe).
-        std::string lobe;
+        /// A direct layer: the index in `layers` of the same lobe's
+        /// indirect light (a divided layer of that lobe), which takes the
+        /// direct light where it is not kept apart (route_direct_light());
+        /// -1: none, the residual takes it.
+        int partner = -1;
+        /// The partner of a direct layer: route_direct_light() writes its
+        /// light.
+        bool takes_direct = false;
         /// Samples a pixel of its colour, the render's own AOV, which
         /// load_layers() prefilters (plan_layer_colours()); 0: as it is.
         int prefilter = 0;
@@ -64,6 +70,15 @@ struct LayersPlan {
     /// (route_direct_light()), which writes the residual the mask reads.
     int reach = 0;
 };
+
+/// Which layers job `j` filters, and whether it is layered and by path:
+/// the convention's direct layers in path mode, else the user's (--layer)
+/// or the convention's. Fails, naming the file, when the mode asks for
+/// layers the file does not have. Path mode is not the default yet: on ten
+/// scenes it is worse than beauty mode on some (docs/LAYERS.md "Light by
+/// path").
+const std::vector<LayerArg>&
+choose_layers(const Job& j, const Convention& conv, bool& path, bool& layered);
 
 /// Choose the layers and the residual; the residual is, unless selected,
 /// the beauty minus the sum of the unfiltered layers, so that nothing of
