@@ -5,7 +5,9 @@
 
 #pragma once
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -95,6 +97,17 @@ albedo_mixture_variance(float a, float lo, float hi)
 /// 2): the filter squares values in float, and a larger one (overflowed
 /// shading, not light) would swamp every window around it.
 constexpr float kLargestFitQuotient = 1e18f;
+
+/// A filtered value (a double sum) as a float saturated at the largest
+/// float (docs/FILTER.md section 7): splats bounded at the largest float
+/// can still average, with an outlier's spread light added, a hair past
+/// it, which would round to Inf.
+inline float
+saturated_float(double v)
+{
+    constexpr double largest = std::numeric_limits<float>::max();
+    return float(std::min(std::max(v, -largest), largest));
+}
 
 /// The pixels of `frame` the output pixels `roi` depend on: roi widened by
 /// `halo` (filter_halo()), clipped to the frame; x and y only.

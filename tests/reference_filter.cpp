@@ -1110,9 +1110,14 @@ Filter::run(RefStats* stats, RefImage* diagnostics)
             bool passthrough = false;
             for (int c = 0; c < 3; ++c) {
                 double ws = wsum[idx(x, y)];
-                if (receiver(x, y, c) && ws > 0.0) {
-                    out.at(x, y, c) = float(acc[idx(x, y) * 3 + c] / ws
-                                            + spread[idx(x, y) * 3 + c]);
+                // A sum a splat overflowed is no value (section 7); the
+                // rest saturates at the largest float.
+                const double v = receiver(x, y, c) && ws > 0.0
+                                     ? acc[idx(x, y) * 3 + c] / ws + spread[idx(x, y) * 3 + c]
+                                     : std::numeric_limits<double>::quiet_NaN();
+                if (std::isfinite(v)) {
+                    const double largest = std::numeric_limits<float>::max();
+                    out.at(x, y, c) = float(std::clamp(v, -largest, largest));
                 } else {
                     passthrough = true;
                     float zc    = z_in.at(x, y, c);

@@ -483,6 +483,35 @@ TEST_F(BadInputTest, ExtremeValuesGiveAFiniteResult)
 }
 
 
+TEST_F(BadInputTest, QuotientsAtTheFloatLimitGiveAFiniteResult)
+{
+    // With an albedo_eps of 1e-30, an albedo of 1e30 under radiance of
+    // -1e30 is an ordinary fit point (z = -1); a pixel of albedo 1e-30
+    // among such points has bounds past the float range, [-Inf, -Inf]
+    // once multiplied out. They must saturate both ways, or the window's
+    // light there is -Inf (found by fuzz_denoise).
+    const int w = 14, h = 16;
+    ImageBuf radiance(ImageSpec(w, h, 3, TypeFloat)), albedo(radiance.spec());
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const bool dark = (x * 7 + y * 3) % 5 == 0;
+            const float l = x < w / 2 ? (dark ? -0.5f : -1e30f) : 0.5f;
+            const float a = x < w / 2 ? (dark ? 1e-30f : 1e30f) : 0.5f;
+            const float lp[3] = { l, l, l }, ap[3] = { a, a, a };
+            radiance.setpixel(x, y, lp);
+            albedo.setpixel(x, y, ap);
+        }
+    zdenoise::FilterOptions opt;
+    opt.albedo_eps = 1e-30f;
+    for (int select = 0; select < 2; ++select) {
+        opt.select = select;
+        ImageBuf out = zdenoise::denoise(radiance, albedo, {}, opt);
+        ASSERT_FALSE(out.has_error()) << out.geterror();
+        EXPECT_EQ(count_nonfinite(out), 0) << "select " << select;
+    }
+}
+
+
 TEST_F(BadInputTest, UnwritableOutputLocationLeavesNothing)
 {
     job::Job j = small_job();

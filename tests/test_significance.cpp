@@ -467,9 +467,10 @@ TEST(Significance, BadValuesPassThroughAndDoNotSpread)
                 in.getpixel(x, y, i, 3);
                 const bool finite_in = std::isfinite(i[0]) && std::isfinite(i[1])
                                        && std::isfinite(i[2]);
-                if (finite_in && std::fabs(i[0]) < 1e20f)
+                if (finite_in && std::fabs(i[0]) < 1e20f) {
                     for (int c = 0; c < 3; ++c)
                         ASSERT_TRUE(std::isfinite(o[c])) << x << "," << y;
+                }
             }
     }
     ImageBuf v;

@@ -220,8 +220,8 @@ WindowSplat(const FeaturePlanes& p, const WindowExtent& e, const float* weight,
             // The bounds saturate at the largest float, a fit's Inf or NaN
             // (huge quotients) is bounded too (splat_kernel.cpp says why).
             const V inv = hn::LoadU(d, p.inv_scale[c] + j);
-            const V lo = hn::Max(hn::Mul(hn::Set(d, fit.lo[c]), inv), hn::Neg(largest));
-            const V hi = hn::Min(hn::Mul(hn::Set(d, fit.hi[c]), inv), largest);
+            const V lo = hn::Min(hn::Max(hn::Mul(hn::Set(d, fit.lo[c]), inv), hn::Neg(largest)), largest);
+            const V hi = hn::Max(hn::Min(hn::Mul(hn::Set(d, fit.hi[c]), inv), largest), hn::Neg(largest));
             const V clamped = hn::Min(hn::Max(hn::IfThenElseZero(hn::Eq(v, v), v), lo), hi);
             // Where clamped the value no longer moves with z (up to the
             // point attaining the bound): no hat term.

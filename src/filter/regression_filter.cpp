@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <mutex>
 
 #include <OpenImageIO/imagebufalgo_util.h>
@@ -188,9 +189,14 @@ normalise_output(ImageBuf& dst, const ImageBuf& quotient,
             int hole_found   = -1;  ///< not looked for yet; then 0 or 1
             for (int ch = 0; ch < 3; ++ch) {
                 float& v = out[o * nch + ch];
-                if ((cl & (kReceiveR << ch)) && splats.wsum[o] > 0.0) {
-                    v = float(splats.acc[3 * o + ch] / splats.wsum[o]
-                              + splats.spread[3 * o + ch]);
+                // A splat of s A can overflow the float where A is at its
+                // bound (section 6): such a sum is no value; pass through.
+                const double filtered =
+                    (cl & (kReceiveR << ch)) && splats.wsum[o] > 0.0
+                        ? splats.acc[3 * o + ch] / splats.wsum[o] + splats.spread[3 * o + ch]
+                        : std::numeric_limits<double>::quiet_NaN();
+                if (std::isfinite(filtered)) {
+                    v = saturated_float(filtered);
                 } else {
                     passed = true;
                     // A hole: no window reached a non-finite value.

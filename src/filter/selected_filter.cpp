@@ -529,11 +529,11 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                         // Saturated at the largest float, as the splats bound
                         // theirs (splat_kernel.cpp).
                         constexpr float largest = std::numeric_limits<float>::max();
-                        const float lo = std::max(bound_lo[3 * k + size_t(c)] * a, -largest);
-                        const float hi = std::min(bound_hi[3 * k + size_t(c)] * a, largest);
+                        const float lo = std::clamp(bound_lo[3 * k + size_t(c)] * a, -largest, largest);
+                        const float hi = std::clamp(bound_hi[3 * k + size_t(c)] * a, -largest, largest);
                         v = std::min(std::max(std::isnan(v) ? 0.0f : v, lo), hi);
                     }
-                    v = float(double(v) + spread[3 * k + size_t(c)]);
+                    v = saturated_float(double(v) + spread[3 * k + size_t(c)]);
                 }
         });
         store(out1[f], sel, c1);

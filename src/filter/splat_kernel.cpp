@@ -147,12 +147,13 @@ splat_lanes(const SplatRow& in)
             const V inv_1wm = reciprocal(hn::Add(one, wm));
             const V A = hn::Mul(hn::MulAdd(wm, Zm, Z), inv_1wm);
             const V ia = hn::LoadU(d, in.inv_albedo[ch] + j);
-            // The bounds saturate at the largest float: a pixel of albedo
-            // near 0 in a bright window has a bound past it, and a plane
-            // fitted to huge quotients can reach Inf there (NaN: taken as 0,
-            // then bounded).
-            const V lo = hn::Max(hn::Mul(llo[ch], ia), hn::Neg(largest));
-            const V hi = hn::Min(hn::Mul(lhi[ch], ia), largest);
+            // The bounds saturate at the largest float, both ways: a pixel
+            // of albedo near 0 in a bright window has a bound past it (in
+            // a window of radiance -1e30 alone, hi = -Inf), and a plane
+            // fitted to huge quotients can reach Inf there (NaN: taken as
+            // 0, then bounded).
+            const V lo = hn::Min(hn::Max(hn::Mul(llo[ch], ia), hn::Neg(largest)), largest);
+            const V hi = hn::Max(hn::Min(hn::Mul(lhi[ch], ia), largest), hn::Neg(largest));
             const V Al = hn::Min(hn::Max(hn::IfThenElseZero(hn::Eq(A, A), A), lo), hi);
             hn::StoreU(hn::Mul(s, Al), d, in.a[ch] + j);
             if (kHat) {
