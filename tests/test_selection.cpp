@@ -572,7 +572,9 @@ TEST(SelectedFilter, NeverWorseThanTodaysFilterAndKeepsTheLight)
         g.normal = &s.normal, g.depth = &s.depth, g.object_id = &s.object_id;
         if (halves)
             g.half_a = &s.half_a, g.half_b = &s.half_b;
+        // Today's filter is select = 0 (the default is the selection).
         zdenoise::FilterOptions today, selected;
+        today.select    = 0;
         selected.select = 1;
         const ImageBuf a = zdenoise::denoise(s.noisy, s.albedo, g, today);
         const ImageBuf b = zdenoise::denoise(s.noisy, s.albedo, g, selected);
