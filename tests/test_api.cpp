@@ -6,6 +6,7 @@
 // refused with a message that names them.
 
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -89,13 +90,44 @@ TEST(Api, HalfAndIntegerInputsGiveTheFloatResult)
 
 TEST(Api, AlphaAndExtraChannelsPassThrough)
 {
-    ImageBuf radiance, albedo;
-    make_scene(radiance, albedo);
-    ImageBuf result = zdenoise::denoise(radiance, albedo);
-    ASSERT_FALSE(result.has_error()) << result.geterror();
-    for (int y = 0; y < 32; y += 5)
-        for (int x = 0; x < 40; x += 3)
-            EXPECT_EQ(result.getchannel(x, y, 0, 3), 1.0f);
+    // RGB, a varying alpha (0 in places: "no surface", which the filter
+    // passes through) and an AOV that is no colour, each pixel its own value:
+    // a channel copied from the wrong pixel or channel would show.
+    ImageBuf rgba, albedo;
+    make_scene(rgba, albedo);
+    const int w = rgba.spec().width, h = rgba.spec().height;
+    ImageSpec spec(w, h, 5, TypeFloat);
+    spec.channelnames  = { "R", "G", "B", "A", "AOV.x" };
+    spec.alpha_channel = 3;
+    ImageBuf radiance(spec);
+    std::mt19937 rng(11);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            float px[5];
+            rgba.getpixel(x, y, px, 3);
+            px[3] = (x + 2 * y) % 7 == 0 ? 0.0f : float(1 + rng() % 1000) / 997.0f;
+            px[4] = float(int(rng() % 20001) - 10000) * 3.7e-3f;
+            radiance.setpixel(x, y, px, 5);
+        }
+    for (const int select : { 0, 1 }) {
+        SCOPED_TRACE(testing::Message() << "select " << select);
+        zdenoise::FilterOptions opt;
+        opt.select      = select;
+        ImageBuf result = zdenoise::denoise(radiance, albedo, {}, opt);
+        ASSERT_FALSE(result.has_error()) << result.geterror();
+        ASSERT_EQ(result.nchannels(), 5);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                for (int c = 3; c < 5; ++c) {
+                    const float a = radiance.getchannel(x, y, 0, c);
+                    const float b = result.getchannel(x, y, 0, c);
+                    ASSERT_EQ(std::memcmp(&a, &b, sizeof(float)), 0)
+                        << "pixel " << x << "," << y << " channel " << c << ": "
+                        << b << " for " << a;
+                }
+        // The colour is denoised (not all passed through with them).
+        EXPECT_GT(max_abs_diff(radiance, result, 3), 0.0f);
+    }
 }
 
 
