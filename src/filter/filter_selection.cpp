@@ -5,8 +5,12 @@
 // among candidates by them (docs/FILTER.md sections 13.3-13.4):
 //   sure_risk()       Stein's unbiased risk estimate, from D and a variance
 //   halves_risk()     the same from two independent halves, no variance
-//   select_by_risk()  box-averaged risk differences, the confidence rule,
-//                     the smoothed choice map and the blend
+//   select_by_risk()  the choice and the blend (13.4), in stages:
+//     check_selection()   its arguments; dst and the weights prepared
+//     choose_by_risk()    the choice map: box-averaged risk differences to
+//                         candidate 0 and the confidence rule
+//     blend_weight()      a candidate's one-hot choice over the map's box
+//     blend_candidates()  the candidates' RGB so weighted, normalised
 
 #include <zdenoise/selection.h>
 
@@ -71,6 +75,169 @@ box_sum(const std::vector<double>& v, int w, int h, int r, int nthreads)
         }
     }, detail::paropt_any_length(nthreads));
     return out;
+}
+
+/// select_by_risk()'s arguments: 2 or more candidates and a risk each, the
+/// options in range, the inputs over roi (the risks over its halo). Fills
+/// in o.frame and roi where undefined; prepares dst and weights.
+bool
+check_selection(ImageBuf& dst, const std::vector<const ImageBuf*>& candidates,
+                const std::vector<const ImageBuf*>& risks, SelectionOptions& o,
+                ImageBuf* weights, ROI& roi)
+{
+    const char* opname = "select_by_risk";
+    const int K        = int(candidates.size());
+    if (K < 2 || risks.size() != candidates.size()) {
+        dst.errorfmt("{}: needs 2 or more candidates and one risk image each "
+                     "(got {} and {})", opname, K, risks.size());
+        return false;
+    }
+    for (int k = 0; k < K; ++k)
+        if (!candidates[size_t(k)] || !risks[size_t(k)]) {
+            dst.errorfmt("{}: candidate or risk {} is missing", opname, k);
+            return false;
+        }
+    if (!o.frame.defined())
+        o.frame = candidates[0]->roi();
+    if (!roi.defined())
+        roi = o.frame;
+    if (o.risk_radius < 0 || o.risk_radius > 64 || o.map_radius < 0
+        || o.map_radius > 64) {
+        dst.errorfmt("{}: options risk_radius = {} and map_radius = {} need "
+                     "0..64", opname, o.risk_radius, o.map_radius);
+        return false;
+    }
+    if (!(o.confidence >= 0.0f) || !std::isfinite(o.confidence)) {
+        dst.errorfmt("{}: option confidence = {} is invalid: needs a finite "
+                     "number >= 0", opname, o.confidence);
+        return false;
+    }
+    if (!detail::check_frame(dst, opname, roi, o.frame))
+        return false;
+    const ROI region = detail::halo_region(roi, o.frame, selection_halo(o));
+    for (int k = 0; k < K; ++k)
+        if (!detail::check_input(dst, *candidates[size_t(k)], opname,
+                                 "candidate", roi, 3)
+            || !detail::check_input(dst, *risks[size_t(k)], opname, "risk",
+                                    region, 1))
+            return false;
+    return detail::prepare_result(dst, dst, roi, o.frame, 3, opname, "the destination")
+           && (!weights
+               || detail::prepare_result(dst, *weights, roi, o.frame, K, opname,
+                                         "the weights image"));
+}
+
+/// The choice at each pixel of `region` (FILTER.md 13.4): the candidate
+/// with the most negative mean risk difference to candidate 0 over the
+/// risk's box, where that is below -confidence standard errors; else 0.
+std::vector<int>
+choose_by_risk(const std::vector<const ImageBuf*>& risks, const ROI& region,
+               const SelectionOptions& o, int nthreads)
+{
+    const int K = int(risks.size());
+    const int w = region.width(), h = region.height();
+    const size_t n = region.npixels();
+    std::vector<std::vector<float>> r(static_cast<size_t>(K));
+    for (int k = 0; k < K; ++k)
+        r[size_t(k)] = detail::read_channels(*risks[size_t(k)], region, 0, 1);
+    std::vector<int> choice(n, 0);
+    std::vector<double> best(n, 0.0);
+    for (int k = 1; k < K; ++k) {
+        std::vector<double> d(n, 0.0), d2(n, 0.0), m(n, 0.0);
+        detail::for_ranges(n, nthreads, [&](size_t ib, size_t ie) {
+            for (size_t i = ib; i < ie; ++i) {
+                const float a = r[size_t(k)][i], b = r[0][i];
+                if (std::isfinite(a) && std::isfinite(b)) {
+                    d[i]  = double(a) - b;
+                    d2[i] = d[i] * d[i];
+                    m[i]  = 1.0;
+                }
+            }
+        });
+        const std::vector<double> s1 = box_sum(d, w, h, o.risk_radius, nthreads);
+        const std::vector<double> s2 = box_sum(d2, w, h, o.risk_radius, nthreads);
+        const std::vector<double> cnt = box_sum(m, w, h, o.risk_radius, nthreads);
+        detail::for_ranges(n, nthreads, [&](size_t ib, size_t ie) {
+            for (size_t i = ib; i < ie; ++i) {
+                if (cnt[i] < 2.0)
+                    continue;
+                const double mean = s1[i] / cnt[i];
+                const double var  = std::max(0.0, s2[i] / cnt[i] - mean * mean);
+                const double se   = std::sqrt(var / (cnt[i] - 1.0));
+                if (mean < -o.confidence * se && mean < best[i]) {
+                    best[i]   = mean;
+                    choice[i] = k;
+                }
+            }
+        });
+    }
+    return choice;
+}
+
+/// Candidate k's blend weight: its one-hot choice averaged over the map's
+/// box (unnormalised: a box sum).
+std::vector<double>
+blend_weight(const std::vector<int>& choice, int k, int w, int h, int map_radius,
+             int nthreads)
+{
+    std::vector<double> onehot(choice.size());
+    detail::for_ranges(choice.size(), nthreads, [&](size_t ib, size_t ie) {
+        for (size_t i = ib; i < ie; ++i)
+            onehot[i] = choice[i] == k ? 1.0 : 0.0;
+    });
+    return box_sum(onehot, w, h, map_radius, nthreads);
+}
+
+/// The output over roi: the candidates' RGB weighted by `alpha` (over
+/// `region`) and normalised, and the normalised weights when asked for.
+bool
+blend_candidates(ImageBuf& dst, ImageBuf* weights,
+                 const std::vector<const ImageBuf*>& candidates,
+                 const std::vector<std::vector<double>>& alpha, const ROI& roi,
+                 const ROI& region, int nthreads)
+{
+    const int K = int(candidates.size());
+    const int w = region.width();
+    const size_t nout = roi.npixels();
+    std::vector<float> out(3 * nout, 0.0f), wout(weights ? size_t(K) * nout : 0);
+    ROI roi3    = roi;
+    roi3.chbegin = 0;
+    roi3.chend   = 3;
+    std::vector<std::vector<float>> c(static_cast<size_t>(K));
+    for (int k = 0; k < K; ++k)
+        c[size_t(k)] = detail::read_channels(*candidates[size_t(k)], roi3, 0, 3);
+    // Each pixel adds its candidates in the order k = 0, 1, ...
+    detail::for_rows(roi, nthreads, [&](int y) {
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const size_t o_ = size_t(y - roi.ybegin) * size_t(roi.width())
+                              + size_t(x - roi.xbegin);
+            const size_t i = size_t(y - region.ybegin) * size_t(w)
+                             + size_t(x - region.xbegin);
+            double acc[3] = { 0.0, 0.0, 0.0 }, total = 0.0;
+            for (int k = 0; k < K; ++k) {
+                const double a = alpha[size_t(k)][i];
+                for (int ch = 0; ch < 3; ++ch)
+                    acc[ch] += a * c[size_t(k)][3 * o_ + size_t(ch)];
+                total += a;
+                if (weights)
+                    wout[size_t(K) * o_ + size_t(k)] = float(a);
+            }
+            for (int ch = 0; ch < 3; ++ch)
+                out[3 * o_ + size_t(ch)] = float(acc[ch] / total);
+            if (weights)
+                for (int k = 0; k < K; ++k)
+                    wout[size_t(K) * o_ + size_t(k)] /= float(total);
+        }
+    });
+    if (!dst.set_pixels(roi3, TypeFloat, out.data()))
+        return false;
+    if (weights) {
+        ROI rk    = roi;
+        rk.chbegin = 0;
+        rk.chend   = K;
+        return weights->set_pixels(rk, TypeFloat, wout.data());
+    }
+    return true;
 }
 
 }  // namespace
@@ -149,137 +316,18 @@ select_by_risk(ImageBuf& dst, const std::vector<const ImageBuf*>& candidates,
                const SelectionOptions& options, ImageBuf* weights, ROI roi,
                int nthreads)
 {
-    const char* opname = "select_by_risk";
-    const int K        = int(candidates.size());
-    if (K < 2 || risks.size() != candidates.size()) {
-        dst.errorfmt("{}: needs 2 or more candidates and one risk image each "
-                     "(got {} and {})", opname, K, risks.size());
-        return false;
-    }
-    for (int k = 0; k < K; ++k)
-        if (!candidates[size_t(k)] || !risks[size_t(k)]) {
-            dst.errorfmt("{}: candidate or risk {} is missing", opname, k);
-            return false;
-        }
     SelectionOptions o = options;
-    if (!o.frame.defined())
-        o.frame = candidates[0]->roi();
-    if (!roi.defined())
-        roi = o.frame;
-    if (o.risk_radius < 0 || o.risk_radius > 64 || o.map_radius < 0
-        || o.map_radius > 64) {
-        dst.errorfmt("{}: options risk_radius = {} and map_radius = {} need "
-                     "0..64", opname, o.risk_radius, o.map_radius);
+    if (!check_selection(dst, candidates, risks, o, weights, roi))
         return false;
-    }
-    if (!(o.confidence >= 0.0f) || !std::isfinite(o.confidence)) {
-        dst.errorfmt("{}: option confidence = {} is invalid: needs a finite "
-                     "number >= 0", opname, o.confidence);
-        return false;
-    }
-    if (!detail::check_frame(dst, opname, roi, o.frame))
-        return false;
+    const int K      = int(candidates.size());
     const ROI region = detail::halo_region(roi, o.frame, selection_halo(o));
-    for (int k = 0; k < K; ++k)
-        if (!detail::check_input(dst, *candidates[size_t(k)], opname,
-                                 "candidate", roi, 3)
-            || !detail::check_input(dst, *risks[size_t(k)], opname, "risk",
-                                    region, 1))
-            return false;
-    if (!detail::prepare_result(dst, dst, roi, o.frame, 3, opname, "the destination")
-        || (weights
-            && !detail::prepare_result(dst, *weights, roi, o.frame, K, opname,
-                                       "the weights image")))
-        return false;
-
     const int w = region.width(), h = region.height();
-    const size_t n = region.npixels();
-    std::vector<std::vector<float>> r(static_cast<size_t>(K));
-    for (int k = 0; k < K; ++k)
-        r[size_t(k)] = detail::read_channels(*risks[size_t(k)], region, 0, 1);
-    // Choice: the candidate with the most negative mean risk difference to
-    // candidate 0, where that is below -confidence standard errors.
-    std::vector<int> choice(n, 0);
-    std::vector<double> best(n, 0.0);
-    for (int k = 1; k < K; ++k) {
-        std::vector<double> d(n, 0.0), d2(n, 0.0), m(n, 0.0);
-        detail::for_ranges(n, nthreads, [&](size_t ib, size_t ie) {
-            for (size_t i = ib; i < ie; ++i) {
-                const float a = r[size_t(k)][i], b = r[0][i];
-                if (std::isfinite(a) && std::isfinite(b)) {
-                    d[i]  = double(a) - b;
-                    d2[i] = d[i] * d[i];
-                    m[i]  = 1.0;
-                }
-            }
-        });
-        const std::vector<double> s1 = box_sum(d, w, h, o.risk_radius, nthreads);
-        const std::vector<double> s2 = box_sum(d2, w, h, o.risk_radius, nthreads);
-        const std::vector<double> cnt = box_sum(m, w, h, o.risk_radius, nthreads);
-        detail::for_ranges(n, nthreads, [&](size_t ib, size_t ie) {
-            for (size_t i = ib; i < ie; ++i) {
-                if (cnt[i] < 2.0)
-                    continue;
-                const double mean = s1[i] / cnt[i];
-                const double var  = std::max(0.0, s2[i] / cnt[i] - mean * mean);
-                const double se   = std::sqrt(var / (cnt[i] - 1.0));
-                if (mean < -o.confidence * se && mean < best[i]) {
-                    best[i]   = mean;
-                    choice[i] = k;
-                }
-            }
-        });
-    }
-    // Blend weights: the one-hot choice averaged over the map's box.
+    const std::vector<int> choice = choose_by_risk(risks, region, o, nthreads);
     std::vector<std::vector<double>> alpha(static_cast<size_t>(K));
-    for (int k = 0; k < K; ++k) {
-        std::vector<double> onehot(n);
-        detail::for_ranges(n, nthreads, [&](size_t ib, size_t ie) {
-            for (size_t i = ib; i < ie; ++i)
-                onehot[i] = choice[i] == k ? 1.0 : 0.0;
-        });
-        alpha[size_t(k)] = box_sum(onehot, w, h, o.map_radius, nthreads);
-    }
-    const size_t nout = roi.npixels();
-    std::vector<float> out(3 * nout, 0.0f), wout(weights ? size_t(K) * nout : 0);
-    ROI roi3    = roi;
-    roi3.chbegin = 0;
-    roi3.chend   = 3;
-    std::vector<std::vector<float>> c(static_cast<size_t>(K));
     for (int k = 0; k < K; ++k)
-        c[size_t(k)] = detail::read_channels(*candidates[size_t(k)], roi3, 0, 3);
-    // Each pixel adds its candidates in the order k = 0, 1, ...
-    detail::for_rows(roi, nthreads, [&](int y) {
-        for (int x = roi.xbegin; x < roi.xend; ++x) {
-            const size_t o_ = size_t(y - roi.ybegin) * size_t(roi.width())
-                              + size_t(x - roi.xbegin);
-            const size_t i = size_t(y - region.ybegin) * size_t(w)
-                             + size_t(x - region.xbegin);
-            double acc[3] = { 0.0, 0.0, 0.0 }, total = 0.0;
-            for (int k = 0; k < K; ++k) {
-                const double a = alpha[size_t(k)][i];
-                for (int ch = 0; ch < 3; ++ch)
-                    acc[ch] += a * c[size_t(k)][3 * o_ + size_t(ch)];
-                total += a;
-                if (weights)
-                    wout[size_t(K) * o_ + size_t(k)] = float(a);
-            }
-            for (int ch = 0; ch < 3; ++ch)
-                out[3 * o_ + size_t(ch)] = float(acc[ch] / total);
-            if (weights)
-                for (int k = 0; k < K; ++k)
-                    wout[size_t(K) * o_ + size_t(k)] /= float(total);
-        }
-    });
-    if (!dst.set_pixels(roi3, TypeFloat, out.data()))
-        return false;
-    if (weights) {
-        ROI rk    = roi;
-        rk.chbegin = 0;
-        rk.chend   = K;
-        return weights->set_pixels(rk, TypeFloat, wout.data());
-    }
-    return true;
+        alpha[size_t(k)] = blend_weight(choice, k, w, h, o.map_radius, nthreads);
+    return blend_candidates(dst, weights, candidates, alpha, roi, region,
+                            nthreads);
 }
 
 }  // namespace zdenoise
