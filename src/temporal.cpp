@@ -2,10 +2,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
 //
 // temporal_combine() and chain_flow(): the neighbouring frames' light
-// reprojected into frame t (docs/TEMPORAL.md). Stages:
-//   read_frame()      the planes a frame is compared and combined by
-//   same_surface()    do frame t's pixel and a neighbour's show one surface
-//   combine_pixel()   the mean light of the frames that do, remodulated
+// reprojected into frame t (docs/TEMPORAL.md, "What it does" 1-4). Stages:
+//   check_combine_inputs()  the frames' images, flows and test scales
+//   read_combine_inputs()   read_frame(): the planes of frame t, of each
+//                           neighbour, and each flow over frame t's region
+//   match_neighbours()      each pixel's match: reproject(), same_surface() (1, 2)
+//   chain_matches()         a chained neighbour matched only where its via is
+//   light_agrees()          the paired test on the light, each scale       (3)
+//   combine_pixel()         the mean light of the frames that count,
+//                           remodulated by their mean albedo               (4)
 
 #include <zdenoise/temporal.h>
 
@@ -317,15 +322,14 @@ check_frame_images(ImageBuf& dst, const TemporalFrame& f,
            && check(g.half_b, "half B", 3);
 }
 
-}  // namespace
-
-
+/// temporal_combine()'s arguments (images, flows over roi, test scales).
+/// Sets roi to the pixels to combine: within frame t's, all its channels.
 bool
-temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
-                 const std::vector<TemporalFrame>& neighbours,
-                 const TemporalOptions& opt, ROI roi, int nthreads)
+check_combine_inputs(ImageBuf& dst, const TemporalFrame& frame,
+                     const std::vector<TemporalFrame>& neighbours,
+                     const TemporalOptions& opt, ROI& roi)
 {
-    if (!check_frame_images(dst.radiance, frame, "frame t"))
+    if (!check_frame_images(dst, frame, "frame t"))
         return false;
     const ROI full = frame.radiance->roi();
     if (!roi.defined())
@@ -336,37 +340,48 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
     for (size_t k = 0; k < neighbours.size(); ++k) {
         const TemporalFrame& n = neighbours[k];
         const std::string which = "neighbour " + std::to_string(k);
-        if (!check_frame_images(dst.radiance, n, which))
+        if (!check_frame_images(dst, n, which))
             return false;
         const ROI fw = n.flow ? n.flow->roi() : ROI();
-        if (n.flow
-            && (fw.nchannels() < 2 || fw.xbegin > roi.xbegin
-                || fw.xend < roi.xend || fw.ybegin > roi.ybegin
-                || fw.yend < roi.yend)) {
-            dst.radiance.errorfmt("{}: {}'s flow needs 2 channels over frame "
-                                  "t's pixels",
-                                  kOp, which);
+        if (n.flow && (fw.nchannels() < 2 || fw.xbegin > roi.xbegin || fw.xend < roi.xend
+                       || fw.ybegin > roi.ybegin || fw.yend < roi.yend)) {
+            dst.errorfmt("{}: {}'s flow needs 2 channels over frame t's "
+                         "pixels", kOp, which);
             return false;
         }
     }
-    // Frame t and the flows over roi and the test's largest box around it.
     if (opt.test_radius < 1 || opt.test_scales < 1 || opt.test_scales > 8) {
-        dst.radiance.errorfmt("{}: the light test needs test_radius >= 1 and "
-                              "1 to 8 test_scales",
-                              kOp);
+        dst.errorfmt("{}: the light test needs test_radius >= 1 and 1 to 8 "
+                     "test_scales", kOp);
         return false;
     }
-    const int r = opt.test_reach();
-    ROI region  = roi_intersection(
-        ROI(roi.xbegin - r, roi.xend + r, roi.ybegin - r, roi.yend + r), full);
-    region.chbegin = 0;
-    region.chend   = roi.chend;
-    const FramePlanes t = read_frame(frame, region, true);
+    return true;
+}
+
+/// Frame t over roi and the light test's largest box, the neighbours over
+/// their data windows, their flows over frame t's region (or empty).
+struct CombineInputs {
+    FramePlanes t;
     std::vector<FramePlanes> ns;
     std::vector<std::vector<float>> flows;
+};
+
+CombineInputs
+read_combine_inputs(const TemporalFrame& frame,
+                    const std::vector<TemporalFrame>& neighbours,
+                    const TemporalOptions& opt, const ROI& roi)
+{
+    const int r = opt.test_reach();
+    ROI region  = roi_intersection(
+        ROI(roi.xbegin - r, roi.xend + r, roi.ybegin - r, roi.yend + r),
+        frame.radiance->roi());
+    region.chbegin = 0;
+    region.chend   = roi.chend;
+    CombineInputs in;
+    in.t = read_frame(frame, region, true);
+    const bool guides = !in.t.variance.empty() || !in.t.half_a.empty();
     for (const TemporalFrame& n : neighbours) {
-        ns.push_back(read_frame(n, n.radiance->roi(), !t.variance.empty()
-                                                          || !t.half_a.empty()));
+        in.ns.push_back(read_frame(n, n.radiance->roi(), guides));
         // Beyond the flow's pixels (a caller's flow over roi only) the
         // test's box has no correspondence.
         const ROI fr = n.flow ? roi_intersection(n.flow->roi(), region) : region;
@@ -376,21 +391,27 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
             const std::vector<float> part = detail::read_channels(*n.flow, fr, 0, 2);
             for (int y = fr.ybegin; y < fr.yend; ++y)
                 std::copy_n(&part[2 * size_t(y - fr.ybegin) * size_t(fr.width())],
-                            2 * size_t(fr.width()), &f[2 * t.index(fr.xbegin, y)]);
+                            2 * size_t(fr.width()), &f[2 * in.t.index(fr.xbegin, y)]);
         }
-        flows.push_back(std::move(f));
+        in.flows.push_back(std::move(f));
     }
-    std::vector<std::vector<Match>> matches
-        = match_neighbours(t, ns, flows, opt, opt.albedo_eps, nthreads);
-    // Chains: nearest first, so that a via's own via is applied before.
+    return in;
+}
+
+/// Chains (TemporalFrame::via): a chained neighbour's pixel counts only
+/// where the frame between shows the same surface. Nearest first, so that
+/// a via's own via is applied before.
+bool
+chain_matches(ImageBuf& dst, const std::vector<TemporalFrame>& neighbours,
+              std::vector<std::vector<Match>>& matches)
+{
     for (size_t k = 0; k < neighbours.size(); ++k) {
         const int via = neighbours[k].via;
         if (via < 0)
             continue;
         if (size_t(via) >= neighbours.size() || size_t(via) == k) {
-            dst.radiance.errorfmt("{}: neighbour {}'s via ({}) is no other "
-                                  "neighbour",
-                                  kOp, k, via);
+            dst.errorfmt("{}: neighbour {}'s via ({}) is no other neighbour",
+                         kOp, k, via);
             return false;
         }
     }
@@ -414,30 +435,45 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
             if (matches[size_t(via)][i].j == kNoMatch)
                 matches[k][i].j = kNoMatch;
     }
-    std::vector<std::vector<uint8_t>> agrees;
-    for (const std::vector<Match>& m : matches)
-        agrees.push_back(light_agrees(m, t.window, roi, opt, nthreads));
-    const bool with_variance = !t.variance.empty();
-    const bool with_halves   = !t.half_a.empty();
-    const size_t npixels     = roi.npixels();
-    dst.same_surface.assign(neighbours.size(), 0.0);
-    for (size_t k = 0; k < neighbours.size(); ++k) {
+    return true;
+}
+
+/// Per neighbour, the share of roi's pixels that show the same surface.
+std::vector<double>
+same_surface_shares(const std::vector<std::vector<Match>>& matches,
+                    const FramePlanes& t, const ROI& roi)
+{
+    const size_t npixels = roi.npixels();
+    std::vector<double> shares(matches.size(), 0.0);
+    for (size_t k = 0; k < matches.size(); ++k) {
         size_t same = 0;
         for (int y = roi.ybegin; y < roi.yend; ++y)
             for (int x = roi.xbegin; x < roi.xend; ++x)
                 same += matches[k][t.index(x, y)].j != kNoMatch;
-        dst.same_surface[k] = npixels ? double(same) / double(npixels) : 0.0;
+        shares[k] = npixels ? double(same) / double(npixels) : 0.0;
     }
-    // Counted per row and neighbour (summed after, in order).
-    std::vector<uint32_t> counted(size_t(roi.height()) * neighbours.size(), 0);
-    for (const FramePlanes& n : ns)
-        if ((with_variance && n.variance.empty())
-            || (with_halves && n.half_a.empty())) {
-            dst.radiance.errorfmt("{}: frame t has {}, a neighbour does not",
-                                  kOp, with_variance ? "a variance" : "halves");
-            return false;
-        }
+    return shares;
+}
 
+/// What combine_pixel() reads: frame t and the neighbours, each
+/// neighbour's matches over t's region and its light test over roi.
+struct Combination {
+    const FramePlanes& t;
+    const std::vector<FramePlanes>& ns;
+    const std::vector<std::vector<Match>>& matches;
+    const std::vector<std::vector<uint8_t>>& agrees;
+    ROI roi;
+    float eps;
+    bool with_variance, with_halves;
+};
+
+/// dst's images over roi: the radiance frame t's (the channels beyond RGB
+/// stay so), the frames, the albedo, the variance and the halves zero.
+void
+prepare_combined(TemporalCombined& dst, const TemporalFrame& frame,
+                 const Combination& cb, int nthreads)
+{
+    const ROI& roi = cb.roi;
     ImageSpec spec(roi.width(), roi.height(), roi.chend, TypeDesc::FLOAT);
     spec.x = roi.xbegin;
     spec.y = roi.ybegin;
@@ -451,113 +487,171 @@ temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
     };
     plane(dst.frames, 1);
     plane(dst.albedo, 3);
-    if (with_variance)
-        plane(dst.variance, t.variance_channels);
-    if (with_halves) {
+    if (cb.with_variance)
+        plane(dst.variance, cb.t.variance_channels);
+    if (cb.with_halves) {
         plane(dst.half_a, 3);
         plane(dst.half_b, 3);
     }
+}
 
-    const float eps = opt.albedo_eps;
-    auto demod = [eps](float a) { return detail::albedo_demodulated(a, eps); };
-    detail::for_rows(roi, nthreads, [&](int y) {
-        float var[3] = {}, ha[3] = {}, hb[3] = {};
-        for (int x = roi.xbegin; x < roi.xend; ++x) {
-            const size_t i = t.index(x, y);
-            // Per channel: the sum of light and of its variance, and the
-            // frames counted.
-            double zsum[3] = {}, vsum[3] = {}, asum[3] = {}, bsum[3] = {},
-                   albsum[3] = {};
-            int count[3] = {}, acount[3] = {};
-            int frames = 1;
-            auto add = [&](const FramePlanes& f, size_t j, int c, bool exact) {
-                const float scale = 1.0f / (f.albedo[3 * j + size_t(c)] + eps);
-                zsum[c] += double(f.rgb[3 * j + size_t(c)]) * scale;
-                if (with_variance) {
-                    const int vc = f.variance_channels == 3 ? c : 0;
-                    vsum[c] += double(f.variance[size_t(f.variance_channels) * j
-                                                 + size_t(vc)])
-                               * scale * scale;
-                }
-                if (with_halves) {
-                    asum[c] += double(f.half_a[3 * j + size_t(c)]) * scale;
-                    bsum[c] += double(f.half_b[3 * j + size_t(c)]) * scale;
-                }
-                if (exact) {
-                    albsum[c] += double(f.albedo[3 * j + size_t(c)]);
-                    ++acount[c];
-                }
-                ++count[c];
-            };
-            for (int c = 0; c < 3; ++c)
-                if (demod(t.albedo[3 * i + size_t(c)]))
-                    add(t, i, c, true);
-            for (size_t k = 0; k < ns.size(); ++k) {
-                const FramePlanes& n = ns[k];
-                const Match& m       = matches[k][i];
-                if (m.j == kNoMatch
-                    || !agrees[k][size_t(y - roi.ybegin) * size_t(roi.width())
-                                  + size_t(x - roi.xbegin)])
-                    continue;
-                const size_t j = m.j;
-                bool used = false;
-                for (int c = 0; c < 3; ++c)
-                    if (demod(t.albedo[3 * i + size_t(c)])
-                        && demod(n.albedo[3 * j + size_t(c)])
-                        && std::isfinite(n.rgb[3 * j + size_t(c)])) {
-                        add(n, j, c, m.exact);
-                        used = true;
-                    }
-                frames += used;
-                counted[size_t(y - roi.ybegin) * ns.size() + k] += used;
-            }
-            float* out_rgb = static_cast<float*>(
-                dst.radiance.pixeladdr(x, y));
-            for (int c = 0; c < 3; ++c) {
-                float& out_albedo = static_cast<float*>(
-                    dst.albedo.pixeladdr(x, y))[c];
-                out_albedo = t.albedo[3 * i + size_t(c)];
-                if (!count[c])
-                    continue;  // not demodulated: frame t's radiance
-                // The albedo averaged over the same frames where the flow
-                // is exact: its own noise (a render's albedo AOV) would
-                // flicker otherwise. A fractional flow would shift the
-                // texture by up to half a pixel: there it stays frame t's.
-                out_albedo     = float(albsum[c] / acount[c]);
-                const double a = double(out_albedo) + eps;
-                out_rgb[c] = float(zsum[c] / count[c] * a);
-                if (with_variance)
-                    var[c] = float(vsum[c] / (double(count[c]) * count[c]) * a * a);
-                if (with_halves) {
-                    ha[c] = float(asum[c] / count[c] * a);
-                    hb[c] = float(bsum[c] / count[c] * a);
-                }
-            }
-            *static_cast<float*>(dst.frames.pixeladdr(x, y)) = float(frames);
-            if (with_variance) {
-                float* v = static_cast<float*>(dst.variance.pixeladdr(x, y));
-                for (int c = 0; c < t.variance_channels; ++c) {
-                    const int src = c;
-                    v[c] = count[src] ? var[src]
-                                      : t.variance[size_t(t.variance_channels) * i
-                                                   + size_t(c)];
-                }
-            }
-            if (with_halves) {
-                float* a = static_cast<float*>(dst.half_a.pixeladdr(x, y));
-                float* b = static_cast<float*>(dst.half_b.pixeladdr(x, y));
-                for (int c = 0; c < 3; ++c) {
-                    a[c] = count[c] ? ha[c] : t.half_a[3 * i + size_t(c)];
-                    b[c] = count[c] ? hb[c] : t.half_b[3 * i + size_t(c)];
-                }
-            }
+/// One pixel's sums per channel over the frames that count: the light,
+/// its variance and the halves' light, each divided by the frame's A + eps;
+/// the albedo of the frames whose flow is exact.
+struct PixelSums {
+    double z[3] = {}, var[3] = {}, half_a[3] = {}, half_b[3] = {},
+           albedo[3] = {};
+    int count[3] = {}, albedo_count[3] = {};
+    int frames = 1;
+
+    void add(const Combination& cb, const FramePlanes& f, size_t j, int c,
+             bool exact)
+    {
+        const float scale = 1.0f / (f.albedo[3 * j + size_t(c)] + cb.eps);
+        z[c] += double(f.rgb[3 * j + size_t(c)]) * scale;
+        if (cb.with_variance) {
+            const int vc = f.variance_channels == 3 ? c : 0;
+            var[c] += double(f.variance[size_t(f.variance_channels) * j
+                                        + size_t(vc)])
+                      * scale * scale;
         }
+        if (cb.with_halves) {
+            half_a[c] += double(f.half_a[3 * j + size_t(c)]) * scale;
+            half_b[c] += double(f.half_b[3 * j + size_t(c)]) * scale;
+        }
+        if (exact) {
+            albedo[c] += double(f.albedo[3 * j + size_t(c)]);
+            ++albedo_count[c];
+        }
+        ++count[c];
+    }
+};
+
+/// Pixel (x, y)'s sums: frame t's, then in order each neighbour's that
+/// matches and passes the light test (counted in the row's `counted`).
+PixelSums
+sum_frames(const Combination& cb, int x, int y, uint32_t* counted)
+{
+    const FramePlanes& t = cb.t;
+    const float eps      = cb.eps;
+    const size_t i       = t.index(x, y);
+    PixelSums s;
+    for (int c = 0; c < 3; ++c)
+        if (detail::albedo_demodulated(t.albedo[3 * i + size_t(c)], eps))
+            s.add(cb, t, i, c, true);
+    for (size_t k = 0; k < cb.ns.size(); ++k) {
+        const FramePlanes& n = cb.ns[k];
+        const Match& m       = cb.matches[k][i];
+        if (m.j == kNoMatch
+            || !cb.agrees[k][size_t(y - cb.roi.ybegin) * size_t(cb.roi.width())
+                             + size_t(x - cb.roi.xbegin)])
+            continue;
+        const size_t j = m.j;
+        bool used = false;
+        for (int c = 0; c < 3; ++c)
+            if (detail::albedo_demodulated(t.albedo[3 * i + size_t(c)], eps)
+                && detail::albedo_demodulated(n.albedo[3 * j + size_t(c)], eps)
+                && std::isfinite(n.rgb[3 * j + size_t(c)])) {
+                s.add(cb, n, j, c, m.exact);
+                used = true;
+            }
+        s.frames += used;
+        counted[k] += used;
+    }
+    return s;
+}
+
+/// Pixel (x, y) of dst: the mean light of the frames that count,
+/// remodulated by their mean albedo; frame t's where not demodulated.
+void
+combine_pixel(TemporalCombined& dst, const Combination& cb, int x, int y,
+              uint32_t* counted)
+{
+    const FramePlanes& t = cb.t;
+    const size_t i       = t.index(x, y);
+    const PixelSums s    = sum_frames(cb, x, y, counted);
+    float var[3] = {}, ha[3] = {}, hb[3] = {};
+    float* out_rgb = static_cast<float*>(dst.radiance.pixeladdr(x, y));
+    for (int c = 0; c < 3; ++c) {
+        float& out_albedo = static_cast<float*>(dst.albedo.pixeladdr(x, y))[c];
+        out_albedo = t.albedo[3 * i + size_t(c)];
+        if (!s.count[c])
+            continue;  // not demodulated: frame t's radiance
+        // The albedo averaged over the same frames where the flow is exact:
+        // its own noise (a render's albedo AOV) would flicker otherwise. A
+        // fractional flow would shift the texture by up to half a pixel:
+        // there it stays frame t's.
+        out_albedo     = float(s.albedo[c] / s.albedo_count[c]);
+        const double a = double(out_albedo) + cb.eps;
+        out_rgb[c] = float(s.z[c] / s.count[c] * a);
+        if (cb.with_variance)
+            var[c] = float(s.var[c] / (double(s.count[c]) * s.count[c]) * a * a);
+        if (cb.with_halves) {
+            ha[c] = float(s.half_a[c] / s.count[c] * a);
+            hb[c] = float(s.half_b[c] / s.count[c] * a);
+        }
+    }
+    *static_cast<float*>(dst.frames.pixeladdr(x, y)) = float(s.frames);
+    if (cb.with_variance) {
+        float* v = static_cast<float*>(dst.variance.pixeladdr(x, y));
+        for (int c = 0; c < t.variance_channels; ++c)
+            v[c] = s.count[c] ? var[c]
+                              : t.variance[size_t(t.variance_channels) * i
+                                           + size_t(c)];
+    }
+    if (cb.with_halves) {
+        float* a = static_cast<float*>(dst.half_a.pixeladdr(x, y));
+        float* b = static_cast<float*>(dst.half_b.pixeladdr(x, y));
+        for (int c = 0; c < 3; ++c) {
+            a[c] = s.count[c] ? ha[c] : t.half_a[3 * i + size_t(c)];
+            b[c] = s.count[c] ? hb[c] : t.half_b[3 * i + size_t(c)];
+        }
+    }
+}
+
+}  // namespace
+
+
+bool
+temporal_combine(TemporalCombined& dst, const TemporalFrame& frame,
+                 const std::vector<TemporalFrame>& neighbours,
+                 const TemporalOptions& opt, ROI roi, int nthreads)
+{
+    if (!check_combine_inputs(dst.radiance, frame, neighbours, opt, roi))
+        return false;
+    const CombineInputs in = read_combine_inputs(frame, neighbours, opt, roi);
+    std::vector<std::vector<Match>> matches
+        = match_neighbours(in.t, in.ns, in.flows, opt, opt.albedo_eps, nthreads);
+    if (!chain_matches(dst.radiance, neighbours, matches))
+        return false;
+    std::vector<std::vector<uint8_t>> agrees;
+    for (const std::vector<Match>& m : matches)
+        agrees.push_back(light_agrees(m, in.t.window, roi, opt, nthreads));
+    dst.same_surface = same_surface_shares(matches, in.t, roi);
+    const Combination cb { in.t, in.ns, matches, agrees, roi, opt.albedo_eps,
+                           !in.t.variance.empty(), !in.t.half_a.empty() };
+    for (const FramePlanes& n : in.ns)
+        if ((cb.with_variance && n.variance.empty())
+            || (cb.with_halves && n.half_a.empty())) {
+            dst.radiance.errorfmt("{}: frame t has {}, a neighbour does not",
+                                  kOp, cb.with_variance ? "a variance" : "halves");
+            return false;
+        }
+    prepare_combined(dst, frame, cb, nthreads);
+    // Counted per row and neighbour (summed after, in order).
+    const size_t nn = in.ns.size();
+    std::vector<uint32_t> counted(size_t(roi.height()) * nn, 0);
+    detail::for_rows(roi, nthreads, [&](int y) {
+        uint32_t* row = counted.data() + size_t(y - roi.ybegin) * nn;
+        for (int x = roi.xbegin; x < roi.xend; ++x)
+            combine_pixel(dst, cb, x, y, row);
     });
-    dst.counted.assign(neighbours.size(), 0.0);
-    for (size_t k = 0; k < neighbours.size(); ++k) {
+    const size_t npixels = roi.npixels();
+    dst.counted.assign(nn, 0.0);
+    for (size_t k = 0; k < nn; ++k) {
         double sum = 0.0;
         for (int y = 0; y < roi.height(); ++y)
-            sum += counted[size_t(y) * ns.size() + k];
+            sum += counted[size_t(y) * nn + k];
         dst.counted[k] = npixels ? sum / double(npixels) : 0.0;
     }
     return true;
