@@ -7,6 +7,7 @@
 // Arnold-style AOVs, specular depth layers, multipart EXR), decodes
 // Cryptomatte into the id guide, and writes the output types asked for.
 
+#include <algorithm>
 #include <cmath>
 #include <initializer_list>
 #include <cstdio>
@@ -497,9 +498,15 @@ TEST_F(LayersCli, TextureSeenInAMirrorIsKept)
                 "Albedo %.5f\n", noisy_err, flat_err, through_err);
     EXPECT_LT(through_err * 2.0, flat_err) << "the texture seen in the mirror must be kept";
     EXPECT_LT(through_err * 3.0, noisy_err);
-    // The diffuse half is not touched by it.
-    EXPECT_NEAR(synth::rel_mse(through, clean, 0, mirror_x - 4, 0, H),
-                synth::rel_mse(flat, clean, 0, mirror_x - 4, 0, H), 0.25 * noisy_err);
+    // The diffuse half is not touched by it: its pixels are flat's, to
+    // float rounding (measured: 6e-8 at most).
+    float worst = 0.0f;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < mirror_x - 4; ++x)
+            for (int c = 0; c < 3; ++c)
+                worst = std::max(worst, std::fabs(through.getchannel(x, y, 0, c)
+                                                  - flat.getchannel(x, y, 0, c)));
+    EXPECT_LE(worst, 1e-6f) << "the mirror's routing changed the diffuse half";
 }
 
 
