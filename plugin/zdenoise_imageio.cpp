@@ -25,8 +25,9 @@
 
 #include <zdenoise/version.h>
 
-#include "../src/job/job.h"
-#include "../src/job/recipe.h"
+#include "job/job.h"
+#include "job/output.h"
+#include "job/recipe.h"
 
 using namespace OIIO;
 namespace job = zdenoise::job;

@@ -35,10 +35,12 @@
 #include <zdenoise/version.h>
 #include <zdenoise/zdenoise.h>
 
+#include "job/failure.h"
 #include "job/frames.h"
 #include "job/job.h"
 #include "job/options.h"
 #include "job/recipe.h"
+#include "job/validate.h"
 
 namespace py  = pybind11;
 namespace job = zdenoise::job;

@@ -37,7 +37,7 @@
 
 #include <zdenoise/zdenoise.h>
 
-#include "../src/job/job.h"
+#include "job/job.h"
 #include "cli_test.h"
 
 extern char** environ;

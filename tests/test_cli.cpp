@@ -12,7 +12,7 @@
 #include <zdenoise/version.h>
 
 #include "cli_test.h"
-#include "../src/job/options.h"
+#include "job/options.h"
 
 using namespace OIIO;
 using namespace cli_test;

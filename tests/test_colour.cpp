@@ -16,7 +16,7 @@
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
 
-#include "../ocio/colour.h"
+#include "ocio/colour.h"
 #include "cli_harness.h"
 #include "synthetic_scenes.h"
 

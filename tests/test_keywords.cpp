@@ -16,8 +16,9 @@
 
 #include <zdenoise/zdenoise.h>
 
-#include "../src/job/options.h"
-#include "../src/job/recipe.h"
+#include "job/options.h"
+#include "job/recipe.h"
+#include "job/validate.h"
 
 using namespace zdenoise;
 using json = nlohmann::json;

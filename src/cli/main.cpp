@@ -30,11 +30,13 @@
 
 #include <zdenoise/zdenoise.h>
 
-#include "../job/atomic_write.h"
-#include "../job/frames.h"
-#include "../job/job.h"
-#include "../job/options.h"
-#include "../job/recipe.h"
+#include "job/atomic_write.h"
+#include "job/failure.h"
+#include "job/frames.h"
+#include "job/job.h"
+#include "job/options.h"
+#include "job/validate.h"
+#include "job/recipe.h"
 #include "sequence.h"
 
 using namespace OIIO;
@@ -45,17 +47,12 @@ using zdenoise::cli::kExitUsage;
 
 namespace {
 
-/// Thrown inside main's helpers only, caught in main: a one-line message
-/// and an exit code.
-struct Failure {
-    std::string message;
-    int code;
-};
-
+/// Thrown inside main's helpers, caught in main: a one-line message and
+/// an exit code.
 [[noreturn]] void
 fail(const std::string& message, int code = kExitError)
 {
-    throw Failure { message, code };
+    throw job::Failure { message, code };
 }
 
 double
@@ -383,9 +380,9 @@ main(int argc, char* argv[])
 #endif
     try {
         return run(argc, argv);
-    } catch (const Failure& f) {
+    } catch (const job::Failure& f) {
         fprintf(stderr, "zdenoise: error: %s\n", f.message.c_str());
-        return f.code;
+        return f.exit_code;
     } catch (const std::exception& e) {
         fprintf(stderr, "zdenoise: error: %s\n", e.what());
         return kExitError;

@@ -18,9 +18,10 @@
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
-#include "../job/atomic_write.h"
-#include "../job/frames.h"
-#include "../job/options.h"
+#include "job/atomic_write.h"
+#include "job/frames.h"
+#include "job/options.h"
+#include "job/validate.h"
 
 namespace zdenoise {
 namespace cli {

@@ -9,7 +9,7 @@
 
 #include <string>
 
-#include "../job/job.h"
+#include "job/job.h"
 #include "shared.h"
 
 namespace zdenoise {

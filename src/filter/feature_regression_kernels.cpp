@@ -14,7 +14,7 @@
 #include <hwy/contrib/math/math-inl.h>
 #include <hwy/highway.h>
 
-#include "../internal.h"
+#include "internal.h"
 #include "feature_regression_kernels.h"
 
 HWY_BEFORE_NAMESPACE();

@@ -20,7 +20,7 @@
 
 #include <OpenImageIO/imagebufalgo_util.h>
 
-#include "../internal.h"
+#include "internal.h"
 
 namespace zdenoise {
 namespace detail {

@@ -15,7 +15,7 @@
 #include <cstring>
 #include <limits>
 
-#include "../internal.h"
+#include "internal.h"
 #include "guide_kernel.h"
 
 HWY_BEFORE_NAMESPACE();

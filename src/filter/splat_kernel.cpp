@@ -14,7 +14,7 @@
 
 #include <limits>
 
-#include "../internal.h"
+#include "internal.h"
 #include "splat_kernel.h"
 
 HWY_BEFORE_NAMESPACE();

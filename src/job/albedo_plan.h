@@ -16,7 +16,7 @@
 #include <zdenoise/zdenoise.h>
 
 #include "input_files.h"
-#include "job.h"
+#include "job_types.h"
 #include "layer_conventions.h"
 #include "layers_plan.h"
 

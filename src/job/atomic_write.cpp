@@ -15,7 +15,7 @@
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/strutil.h>
 
-#include "job.h"
+#include "failure.h"
 
 namespace zdenoise {
 namespace job {

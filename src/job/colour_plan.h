@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "input_files.h"
-#include "job.h"
+#include "job_types.h"
 
 namespace zdenoise {
 namespace job {

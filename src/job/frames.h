@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "job.h"
+#include "job_types.h"
 
 namespace zdenoise {
 namespace job {

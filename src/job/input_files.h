@@ -18,7 +18,7 @@
 #include <OpenImageIO/imagebuf.h>
 
 #include "channel_spec.h"
-#include "job.h"
+#include "job_types.h"
 #include "row_reader.h"
 
 namespace zdenoise {

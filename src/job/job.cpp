@@ -31,10 +31,13 @@
 #include "memory_plan.h"
 #include "neighbour_frames.h"
 #include "options.h"
+#include "validate.h"
 #include "role_defaults.h"
 #include "output.h"
+#include "output_sinks.h"
 #include "strip_plan.h"
 #include "strips.h"
+#include "temporal_strip.h"
 
 namespace zdenoise {
 namespace job {
@@ -76,25 +79,48 @@ log_mode(const Job& j, const Convention& conv, const Plan& p,
 }
 
 
-/// Read the headers of job `j` (its convention's defaults applied) and
-/// decide everything: roles, colour, layers, output, strips. Fails before
-/// any pixel is read. Ends with the sink begun.
+/// --temporal's conditions, and what -v says of its frames.
 void
-plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
+check_temporal(const Job& j, const Plan& p, JobResult& result)
+{
+    if (p.layered)
+        fail("--temporal works in --mode beauty (the layers' light is "
+             "not combined across frames yet; docs/TEMPORAL.md)");
+    if (!j.static_camera && !p.roles.motion.used)
+        fail(format("--temporal {}: '{}' has no motion vectors (a Cycles "
+                    "Vector pass, Arnold's motionvector); give --motion "
+                    "FILE[:ch=X,Y] or, when nothing moves, "
+                    "--static-camera",
+                    j.temporal, j.in.path));
+    std::string offsets;
+    for (int o : j.neighbour_offsets)
+        offsets += format("{}{:+d}", offsets.empty() ? "" : ",", o);
+    result.log.push_back(format(
+        "temporal  frames {} around this one, {}", 
+        offsets.empty() ? std::string("none") : offsets,
+        j.static_camera ? "a static camera (no motion vectors)"
+                        : "reprojected through the motion vectors"));
+}
+
+
+/// Stage 1 of plan(): job `j` checked, its convention's and files'
+/// defaults applied, the layers chosen and the roles' channels selected.
+/// Returns the --in file's convention.
+Convention
+plan_roles(Job& j, InputFiles& files, Plan& p, AuxConvention& aux,
+           std::vector<LayerArg>& layer_args, JobResult& result)
 {
     const std::string invalid = validate(j, Spelling::CommandLine);
     if (!invalid.empty())
         fail(invalid);
     const InputHeader& in = files.header(j.in.path);
     const Convention conv = detect_convention(in.channelnames);
-    AuxConvention aux;
     std::string remodulation;
     if (j.aux.given)
         apply_aux(j, files, aux, remodulation, result.log);
     apply_defaults(j, conv, result.log);
     apply_file_defaults(j, files);
-    const std::vector<LayerArg>& layer_args = choose_layers(j, conv, p.path,
-                                                            p.layered);
+    layer_args = choose_layers(j, conv, p.path, p.layered);
     if (!p.layered && !j.albedo.given)
         fail(format("no albedo: '{}' has no Denoising Albedo pass; give "
                     "--albedo FILE or --aux FILE",
@@ -107,32 +133,22 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
                     j.in.path, p.noisy.width(), p.noisy.height(), pixels,
                     j.max_pixels));
     p.roles = select_roles(files, j, p.layered);
-    if (j.temporal > 0) {
-        if (p.layered)
-            fail("--temporal works in --mode beauty (the layers' light is "
-                 "not combined across frames yet; docs/TEMPORAL.md)");
-        if (!j.static_camera && !p.roles.motion.used)
-            fail(format("--temporal {}: '{}' has no motion vectors (a Cycles "
-                        "Vector pass, Arnold's motionvector); give --motion "
-                        "FILE[:ch=X,Y] or, when nothing moves, "
-                        "--static-camera",
-                        j.temporal, j.in.path));
-        std::string offsets;
-        for (int o : j.neighbour_offsets)
-            offsets += format("{}{:+d}", offsets.empty() ? "" : ",", o);
-        result.log.push_back(format(
-            "temporal  frames {} around this one, {}", 
-            offsets.empty() ? std::string("none") : offsets,
-            j.static_camera ? "a static camera (no motion vectors)"
-                            : "reprojected through the motion vectors"));
-    }
+    if (j.temporal > 0)
+        check_temporal(j, p, result);
     if (!p.layered && !remodulation.empty()) {
         p.roles.remodulation.selection
             = select_role(files, { j.aux.path, remodulation, true },
                           Role::Albedo, &p.noisy, j.in.path);
         p.roles.remodulation.used = true;
     }
+    return conv;
+}
 
+
+/// Stage 2 of plan(): the colour spaces of the roles.
+void
+plan_colour(const Job& j, InputFiles& files, Plan& p, JobResult& result)
+{
     // Radiance and albedo RGB into the working space (ocio/colour.h).
     p.managed = resolve_colour(j, files, p.config, p.spaces, result.log);
     // Layers are filtered in the input's own space: a divided layer is a
@@ -150,7 +166,14 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
                              "to the working space)");
     p.radiance_as_is = !p.managed || p.spaces.input == p.spaces.working;
     p.albedo_as_is   = !p.managed || p.spaces.albedo == p.spaces.working;
+}
 
+
+/// What -v says of the files and of each role's channels.
+void
+log_roles(const Job& j, InputFiles& files, const Plan& p, JobResult& result)
+{
+    const InputHeader& in = files.header(j.in.path);
     result.log.push_back(format("{}x{}, {} channels in '{}'",
                                 p.noisy.width(), p.noisy.height(),
                                 in.channelnames.size(), j.in.path));
@@ -165,6 +188,16 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
     for (const OptionalRole* o : p.roles.optional())
         if (o->used)
             show(o->label, o->selection);
+}
+
+
+/// Stage 3 of plan(): the light to filter: the albedo (beauty mode) or
+/// the layers and their colours.
+void
+plan_light(const Job& j, InputFiles& files, const Convention& conv,
+           const AuxConvention& aux, const std::vector<LayerArg>& layer_args,
+           Plan& p, JobResult& result)
+{
     if (!p.layered)
         p.albedo = plan_albedo(j, files, conv, p.roles, p.noisy, result.log);
 
@@ -191,7 +224,14 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
         p.albedo = plan_layer_colours(j, files, p.layers, result.log);
     }
     log_mode(j, conv, p, layer_args, mode_line, result.log);
+}
 
+
+/// Stage 4 of plan(): the output's layout, colour space and metadata.
+ImageSpec
+plan_output(const Job& j, InputFiles& files, Plan& p, JobResult& result)
+{
+    const InputHeader& in = files.header(j.in.path);
     ImageSpec spec;
     layout_output(j, in, p.roles.radiance, p.layers, spec, p.output.channels,
                   result.channel_formats);
@@ -204,71 +244,23 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
                                             : " mode=beauty");
     parameters += p.albedo.describe();
     spec.attribute("zdenoise.parameters", parameters);
+    return spec;
+}
 
-    // Strips: their height from the memory each needs.
-    StripCost cost;
-    cost.width  = p.noisy.width();
-    cost.height = p.noisy.height();
-    // A direct layer's keep_structure() reads one pixel beyond the strip.
-    cost.halo   = filter_halo(j.filter) + (p.path ? 1 : 0);
-    // The residual layer's mask looks further than the filter.
-    cost.around = cost.halo + p.layers.reach
-                  + p.albedo.halo();
-    add_file_costs(cost, files);
-    // Role images: copies when converted or not lying together in the
-    // file, else the file's rows themselves (Strip::image()). The quotient
-    // (demodulate()), the filtered and the denoised radiance.
-    cost.held_pixel = role_bytes(files, p.roles.radiance, p.radiance_as_is)
-                      + 16.0;
-    cost.core_pixel = 32.0;
-    if (!p.layered)
-        cost.held_pixel += role_bytes(files, p.roles.albedo, p.albedo_as_is);
-    for (const OptionalRole* o : p.roles.optional())
-        if (o->used)
-            cost.held_pixel += role_bytes(files, o->selection,
-                                          role_as_is(*o, p));
-    if (p.layered) {
-        // Each layer's radiance and albedo sums, the residual and the sum
-        // (over the held rows), each denoised layer (over the strip).
-        cost.held_pixel += 24.0 * double(p.layers.layers.size()) + 24.0
-                           + (p.layers.residual_is_layer ? 8.0 : 0.0);
-        cost.core_pixel += 12.0 * double(p.layers.layers.size());
-    }
-    // The filter's tile: its decoded planes and accumulators (192 bytes a
-    // pixel, on the safe side); with select also the selection's planes
-    // (FILTER.md 13: candidate 0's output and hat diagonal, the pilot, the
-    // fitted quotient, the two feature regressions, the risks; 1080p in 2
-    // strips: 812 MiB peak, this estimate 860 MiB).
-    cost.tile       = j.filter.select ? detail::kSelectionTile : detail::kFilterTile;
-    cost.tile_pixel = j.filter.select ? 320.0 : 192.0;
-    // The prefiltered albedo, its variance, its sums (4 doubles).
-    if (p.albedo.prefilter)
-        cost.held_pixel += 24.0 + 32.0;
-    if (p.albedo.pool)
-        cost.held_pixel += 12.0;
-    // The maps, and the filter's sums for them (5 doubles a pixel).
+
+/// Stage 5 of plan(): the strips, from the memory each needs
+/// (memory_plan.cpp), and the sink begun.
+void
+plan_strips_and_begin(const Job& j, InputFiles& files, OutputSink& sink,
+                      const ImageSpec& spec, Plan& p, JobResult& result)
+{
+    const InputHeader& in = files.header(j.in.path);
     p.maps = j.diagnostics || !j.diagnostics_png.empty();
-    if (p.maps)
-        cost.core_pixel += 16.0 + 40.0 + (p.layered ? 48.0 : 0.0);
     if (!j.diagnostics_png.empty())
         p.picture = ErrorPicture(p.noisy);
     p.output.sink = &sink;
     p.output.set_row_types(sink.float_rows());
-    add_output_costs(cost, sink, spec, p.output.pixel_bytes);
-    if (j.temporal > 0) {
-        // The light test's box around what the filter reads; each
-        // neighbour's roles (as floats, over about as many rows as the
-        // strip: the rows its flow reaches), its flow and the combined
-        // images.
-        cost.around += temporal_reach(j);
-        double role_floats = double(p.roles.radiance.indices.size()
-                                    + p.roles.albedo.indices.size());
-        for (const OptionalRole* o : p.roles.optional())
-            if (o->used)
-                role_floats += double(o->selection.indices.size());
-        cost.held_pixel += double(j.neighbours.size()) * (4.0 * role_floats + 16.0)
-                           + 4.0 * role_floats;
-    }
+    const StripCost cost = strip_cost(j, p, files, sink, spec);
     plan_strips(j, in, cost, result);
     p.around = cost.around;
     result.log.push_back(
@@ -292,6 +284,23 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
 }
 
 
+/// Read the headers of job `j` (its convention's defaults applied) and
+/// decide everything: roles, colour, layers, output, strips. Fails before
+/// any pixel is read. Ends with the sink begun.
+void
+plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
+{
+    AuxConvention aux;
+    std::vector<LayerArg> layer_args;
+    const Convention conv = plan_roles(j, files, p, aux, layer_args, result);
+    plan_colour(j, files, p, result);
+    log_roles(j, files, p, result);
+    plan_light(j, files, conv, aux, layer_args, p, result);
+    const ImageSpec spec = plan_output(j, files, p, result);
+    plan_strips_and_begin(j, files, sink, spec, p, result);
+}
+
+
 /// Read, denoise and write strip `s` of the plan `p`; its statistics (and
 /// each layer's) are added to `result` and `layer_stats`.
 void
@@ -309,43 +318,13 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
                                    j.threads, err))
             fail(format("cannot read '{}': {}", path, one_line(err)));
     }
-    // Images converted to the working space are copies; the others are
-    // the files' rows.
     const RoleSelections& roles = p.roles;
-    auto read = [&](const OptionalRole& o) {
-        return o.used ? strip.image(o.selection, role_as_is(o, p))
-                      : ImageBuf();
-    };
-    RoleImages img;
-    img.radiance = strip.image(roles.radiance, p.radiance_as_is);
-    if (!p.layered)
-        img.albedo = strip.image(roles.albedo, p.albedo_as_is);
-    img.normal   = read(roles.normal);
-    img.depth    = read(roles.depth);
-    img.id       = read(roles.id);
-    img.variance = read(roles.variance);
-    img.half_a   = read(roles.half_a);
-    img.half_b   = read(roles.half_b);
-    img.remodulation = read(roles.remodulation);
-    img.motion       = read(roles.motion);
-    if (roles.own_albedo.used)
-        img.own_albedo = strip.image(roles.own_albedo.selection,
-                                     p.radiance_as_is);
-    ImageBuf half_a_albedo = read(roles.half_a_albedo),
-             half_b_albedo = read(roles.half_b_albedo);
-    convert_role(p, img.radiance, p.spaces.input, p.spaces.working, j.in);
-    convert_role(p, img.albedo, p.spaces.albedo, p.spaces.working, j.albedo);
-    convert_role(p, img.remodulation, p.spaces.albedo, p.spaces.working, j.aux);
-    convert_role(p, img.own_albedo, p.spaces.input, p.spaces.working, j.in);
-    convert_role(p, img.half_a, p.spaces.input, p.spaces.working, j.half_a);
-    convert_role(p, img.half_b, p.spaces.input, p.spaces.working, j.half_b);
-    convert_role(p, half_a_albedo, p.spaces.albedo, p.spaces.working, j.half_a);
-    convert_role(p, half_b_albedo, p.spaces.albedo, p.spaces.working, j.half_b);
+    RoleImages img = read_role_images(j, p, strip);
     // Over what the filter reads: the strip and its halo (and with
     // --temporal, the light test's box around it).
     if (!p.layered)  // the layers' colours: load_layers()
-        make_albedo(p.albedo, img.albedo, img.own_albedo, half_a_albedo,
-                    half_b_albedo, strip.widened(filter_halo(j.filter) + temporal_reach(j)),
+        make_albedo(p.albedo, img.albedo, img.own_albedo, img.half_a_albedo,
+                    img.half_b_albedo, strip.widened(filter_halo(j.filter) + temporal_reach(j)),
                     strip.core, j.threads, p.pooled, j.albedo.path);
     if (j.temporal > 0)
         combine_neighbours(j, p, files, strip, img, result);
@@ -446,30 +425,6 @@ run(Job j, OutputSink& sink, JobResult& result)
 }  // namespace
 
 
-std::string
-one_line(std::string s)
-{
-    s = Strutil::strip(s);
-    for (char& c : s)
-        if (c == '\n' || c == '\r')
-            c = ' ';
-    return s;
-}
-
-
-std::vector<std::string>
-input_paths(const Job& j)
-{
-    std::vector<std::string> paths;
-    for (const InputArg* a : { &j.in, &j.albedo, &j.normal, &j.depth, &j.id,
-                               &j.variance, &j.half_a, &j.half_b, &j.aux,
-                               &j.motion })
-        if (a->given)
-            paths.push_back(a->path);
-    return paths;
-}
-
-
 bool
 run_job(const Job& job, OutputSink& sink, JobResult& result,
         std::string& error)
@@ -485,6 +440,40 @@ run_job(const Job& job, OutputSink& sink, JobResult& result,
         error = one_line(e.what());
     }
     return false;
+}
+
+bool
+run_job(const Job& job, JobResult& result, std::string& error)
+{
+    ImageSink sink(result.image);
+    return run_job(job, sink, result, error);
+}
+
+
+bool
+run_job_to_file(const Job& job, const std::string& path, JobResult& result,
+                std::string& error)
+{
+    // A failure of the job itself is reported as it is; only a failure to
+    // write is "cannot write PATH".
+    std::string job_error;
+    bool job_failed = false;
+    const bool ok   = write_atomically(
+        path,
+        [&](const std::string& tmp, std::string& why) {
+            FileSink sink(tmp);
+            if (run_job(job, sink, result, why))
+                return true;
+            if (!sink.write_failed()) {
+                job_failed = true;
+                job_error  = why;
+            }
+            return false;
+        },
+        error);
+    if (!ok && job_failed)
+        error = job_error;
+    return ok;
 }
 
 }  // namespace job

@@ -13,7 +13,7 @@
 #include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
 
-#include "../internal.h"
+#include "internal.h"
 #include "failure.h"
 
 namespace zdenoise {

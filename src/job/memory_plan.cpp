@@ -9,6 +9,8 @@
 
 #include "failure.h"
 #include "strips.h"
+#include "strip_plan.h"
+#include "temporal_strip.h"
 
 namespace zdenoise {
 namespace job {
@@ -87,6 +89,72 @@ add_output_costs(StripCost& cost, const OutputSink& sink,
         scanlines.tile_width = scanlines.tile_height = 0;
         cost.fixed += codec_bytes(scanlines, pixel_bytes);
     }
+}
+
+
+StripCost
+strip_cost(const Job& j, const Plan& p, InputFiles& files,
+           const OutputSink& sink, const ImageSpec& spec)
+{
+    StripCost cost;
+    cost.width  = p.noisy.width();
+    cost.height = p.noisy.height();
+    // A direct layer's keep_structure() reads one pixel beyond the strip.
+    cost.halo   = filter_halo(j.filter) + (p.path ? 1 : 0);
+    // The residual layer's mask looks further than the filter.
+    cost.around = cost.halo + p.layers.reach
+                  + p.albedo.halo();
+    add_file_costs(cost, files);
+    // Role images: copies when converted or not lying together in the
+    // file, else the file's rows themselves (Strip::image()). The quotient
+    // (demodulate()), the filtered and the denoised radiance.
+    cost.held_pixel = role_bytes(files, p.roles.radiance, p.radiance_as_is)
+                      + 16.0;
+    cost.core_pixel = 32.0;
+    if (!p.layered)
+        cost.held_pixel += role_bytes(files, p.roles.albedo, p.albedo_as_is);
+    for (const OptionalRole* o : p.roles.optional())
+        if (o->used)
+            cost.held_pixel += role_bytes(files, o->selection,
+                                          role_as_is(*o, p));
+    if (p.layered) {
+        // Each layer's radiance and albedo sums, the residual and the sum
+        // (over the held rows), each denoised layer (over the strip).
+        cost.held_pixel += 24.0 * double(p.layers.layers.size()) + 24.0
+                           + (p.layers.residual_is_layer ? 8.0 : 0.0);
+        cost.core_pixel += 12.0 * double(p.layers.layers.size());
+    }
+    // The filter's tile: its decoded planes and accumulators (192 bytes a
+    // pixel, on the safe side); with select also the selection's planes
+    // (FILTER.md 13: candidate 0's output and hat diagonal, the pilot, the
+    // fitted quotient, the two feature regressions, the risks; 1080p in 2
+    // strips: 812 MiB peak, this estimate 860 MiB).
+    cost.tile       = j.filter.select ? detail::kSelectionTile : detail::kFilterTile;
+    cost.tile_pixel = j.filter.select ? 320.0 : 192.0;
+    // The prefiltered albedo, its variance, its sums (4 doubles).
+    if (p.albedo.prefilter)
+        cost.held_pixel += 24.0 + 32.0;
+    if (p.albedo.pool)
+        cost.held_pixel += 12.0;
+    // The maps, and the filter's sums for them (5 doubles a pixel).
+    if (p.maps)
+        cost.core_pixel += 16.0 + 40.0 + (p.layered ? 48.0 : 0.0);
+    add_output_costs(cost, sink, spec, p.output.pixel_bytes);
+    if (j.temporal > 0) {
+        // The light test's box around what the filter reads; each
+        // neighbour's roles (as floats, over about as many rows as the
+        // strip: the rows its flow reaches), its flow and the combined
+        // images.
+        cost.around += temporal_reach(j);
+        double role_floats = double(p.roles.radiance.indices.size()
+                                    + p.roles.albedo.indices.size());
+        for (const OptionalRole* o : p.roles.optional())
+            if (o->used)
+                role_floats += double(o->selection.indices.size());
+        cost.held_pixel += double(j.neighbours.size()) * (4.0 * role_floats + 16.0)
+                           + 4.0 * role_floats;
+    }
+    return cost;
 }
 
 

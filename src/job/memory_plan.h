@@ -15,12 +15,14 @@
 
 #include <OpenImageIO/imageio.h>
 
-#include "../internal.h"
+#include "internal.h"
 #include "input_files.h"
-#include "job.h"
+#include "job_types.h"
 
 namespace zdenoise {
 namespace job {
+
+struct Plan;  // strip_plan.h
 
 /// The memory a strip needs. Measured peaks of the heap (docs/PERFORMANCE.md,
 /// "Memory") sit at or below these estimates, which leave out what does
@@ -59,6 +61,11 @@ struct StripCost {
 };
 
 
+/// Half of the machine's memory (MemTotal, or the cgroup's memory.max when
+/// lower): room for the frame and whatever else runs on a render node.
+uint64_t
+default_memory_limit();
+
 /// "512 MiB", "1.5 GiB".
 std::string
 readable_size(double bytes);
@@ -85,6 +92,14 @@ role_bytes(InputFiles& files, const Selection& s, bool read_only);
 void
 add_output_costs(StripCost& cost, const OutputSink& sink,
                  const OIIO::ImageSpec& spec, size_t pixel_bytes);
+
+/// The memory a strip of job `j` costs, as plan() has decided it (`p`:
+/// roles, layers, albedo, maps, the output's rows as `sink` takes them;
+/// `spec` the output's): the model of memory, measured (docs/PERFORMANCE.md,
+/// "Memory").
+StripCost
+strip_cost(const Job& j, const Plan& p, InputFiles& files,
+           const OutputSink& sink, const OIIO::ImageSpec& spec);
 
 /// How many rows a strip of job `j` has (result.strip_rows, strips,
 /// estimated_bytes); refuses a job whose strip needs more memory than

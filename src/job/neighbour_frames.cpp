@@ -10,7 +10,7 @@
 
 #include <OpenImageIO/imagebufalgo_util.h>
 
-#include "../internal.h"
+#include "internal.h"
 #include "failure.h"
 #include "strips.h"
 

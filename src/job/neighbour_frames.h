@@ -12,7 +12,7 @@
 #include <OpenImageIO/imagebuf.h>
 
 #include "input_files.h"
-#include "job.h"
+#include "job_types.h"
 
 namespace zdenoise {
 namespace job {

@@ -17,7 +17,7 @@
 #include <variant>
 #include <vector>
 
-#include "job.h"
+#include "job_types.h"
 
 namespace zdenoise {
 namespace job {
@@ -152,21 +152,6 @@ option_name(const Option& option, Spelling spelling);
 /// The option `spelling` names `name`, or null.
 const Option*
 find_option(const std::string& name, Spelling spelling);
-
-/// Every check of a job that needs no file (validate.cpp): "" when `job`
-/// is valid, else a one-line message naming the option at fault as
-/// `spelling` names it. The command line, recipes and run_job() all use it.
-std::string
-validate(const Job& job, Spelling spelling);
-
-/// Unless `force`: the error for an `output` that is also an input of `job`
-/// (the same existing file, whatever the spelling of its path), which says
-/// how `spelling` allows it (--force, force=True); else "". The command
-/// (a single image and each frame of a batch) and the Python module refuse
-/// such an output the same way.
-std::string
-output_is_input(const Job& job, const std::string& output, bool force,
-                Spelling spelling);
 
 }  // namespace job
 }  // namespace zdenoise

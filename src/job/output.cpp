@@ -10,7 +10,6 @@
 #include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
 
-#include "atomic_write.h"
 #include "failure.h"
 #include "layer_conventions.h"
 #include "memory_plan.h"
@@ -240,126 +239,6 @@ Output::write(const Strip& strip, const RowReader& in,
     }
 }
 
-
-namespace {
-
-/// The output image in memory, float, with its write formats set.
-class ImageSink final : public OutputSink {
-public:
-    explicit ImageSink(ImageBuf& image)
-        : m_image(image)
-    {
-    }
-    bool begin(const ImageSpec& spec, const std::vector<TypeDesc>& formats,
-               std::string& error) override
-    {
-        m_image.reset(spec);
-        m_image.set_write_format(formats);
-        return true;
-    }
-    bool float_rows() const override { return true; }
-    bool holds_image() const override { return true; }
-    bool rows(int ybegin, int yend, const void* data,
-              std::string& error) override
-    {
-        const ImageSpec& s = m_image.spec();
-        if (m_image.set_pixels(ROI(s.x, s.x + s.width, ybegin, yend, s.z,
-                                   s.z + 1, 0, s.nchannels),
-                               TypeFloat, data))
-            return true;
-        error = m_image.geterror();
-        return false;
-    }
-
-private:
-    ImageBuf& m_image;
-};
-
-
-/// The output file, written as ImageBuf::write would write the image in
-/// memory: scanlines, each channel in its output type, the pixel type of
-/// the spec the widest.
-class FileSink final : public OutputSink {
-public:
-    explicit FileSink(const std::string& path)
-        : m_path(path)
-    {
-    }
-    bool begin(const ImageSpec& spec, const std::vector<TypeDesc>& formats,
-               std::string& error) override
-    {
-        const ImageSpec s = native_spec(spec, formats);
-        m_out = ImageOutput::create(m_path);
-        if (!m_out)
-            return failed(OIIO::geterror(), error);
-        if (!m_out->open(m_path, s))
-            return failed(m_out->geterror(), error);
-        m_z = s.z;
-        return true;
-    }
-    bool rows(int ybegin, int yend, const void* data,
-              std::string& error) override
-    {
-        return m_out->write_scanlines(ybegin, yend, m_z, TypeUnknown, data)
-               || failed(m_out->geterror(), error);
-    }
-    bool end(std::string& error) override
-    {
-        return m_out->close() || failed(m_out->geterror(), error);
-    }
-    /// Whether the failure, if any, was writing.
-    bool write_failed() const { return m_failed; }
-
-private:
-    bool failed(std::string why, std::string& error)
-    {
-        m_failed = true;
-        error    = why.empty() ? std::string("unknown error") : why;
-        return false;
-    }
-
-    std::string m_path;
-    std::unique_ptr<ImageOutput> m_out;
-    int m_z       = 0;
-    bool m_failed = false;
-};
-
-}  // namespace
-
-
-bool
-run_job(const Job& job, JobResult& result, std::string& error)
-{
-    ImageSink sink(result.image);
-    return run_job(job, sink, result, error);
-}
-
-
-bool
-run_job_to_file(const Job& job, const std::string& path, JobResult& result,
-                std::string& error)
-{
-    // A failure of the job itself is reported as it is; only a failure to
-    // write is "cannot write PATH".
-    std::string job_error;
-    bool job_failed = false;
-    const bool ok   = write_atomically(
-        path,
-        [&](const std::string& tmp, std::string& why) {
-            FileSink sink(tmp);
-            if (run_job(job, sink, result, why))
-                return true;
-            if (!sink.write_failed()) {
-                job_failed = true;
-                job_error  = why;
-            }
-            return false;
-        },
-        error);
-    if (!ok && job_failed)
-        error = job_error;
-    return ok;
-}
 
 }  // namespace job
 }  // namespace zdenoise

@@ -5,7 +5,7 @@
 // replaced by the denoised beauty and, with --aovs, the denoised layers
 // added; each channel's pixel type), the assembly of each strip's output
 // rows, and the sinks they go to (an image in memory, a file). The pixel
-// format of the output file is chosen by native_spec() (job.h), which
+// format of the output file is chosen by native_spec(), which
 // the OIIO plugin uses too.
 
 #pragma once
@@ -42,6 +42,15 @@ layout_output(const Job& j, const InputHeader& in, const Selection& radiance,
               const LayersPlan& layers, OIIO::ImageSpec& spec,
               std::vector<OutputChannel>& channels,
               std::vector<OIIO::TypeDesc>& formats);
+
+/// The spec of the output as a file holds it (and the OIIO plugin serves
+/// it): `spec` in scanlines, each channel in its output pixel type
+/// (`formats`), `format` the widest of them (TypeDesc::basetype_merge), the
+/// per-channel formats listed only when they differ.
+OIIO::ImageSpec
+native_spec(const OIIO::ImageSpec& spec,
+            const std::vector<OIIO::TypeDesc>& formats);
+
 
 /// The index of the diagnostic maps (Job::diagnostics) among the denoised
 /// images: after the beauty and the layers.

@@ -17,8 +17,10 @@
 #include <OpenImageIO/strutil.h>
 
 #include "atomic_write.h"
+#include "failure.h"
 #include "frames.h"
 #include "options.h"
+#include "validate.h"
 
 namespace zdenoise {
 namespace job {
@@ -38,19 +40,14 @@ constexpr uint64_t kMaxRecipeBytes = 1 << 20;
 
 constexpr const char* kVersionKey = "zdenoise-recipe";
 
-/// Thrown inside this file only and turned into the callers' error.
-struct Failure {
-    std::string message;
-};
-
 /// Throw `message` with its control characters escaped: it quotes keys
 /// and values the recipe or its REST arguments gave, and an error stays
 /// one line whatever they hold (a newline in a key; found by
 /// tests/fuzz/fuzz_recipe).
 [[noreturn]] void
-fail(const std::string& message)
+fail_escaped(const std::string& message)
 {
-    throw Failure { control_escaped(message) };
+    fail(control_escaped(message));
 }
 
 
@@ -109,7 +106,7 @@ confined(const std::string& key, const std::string& given,
         return given;
     std::string path, error;
     if (!confine_path(key, given, source.folder, *source.rules, path, error))
-        fail(error);
+        fail_escaped(error);
     return path;
 }
 
@@ -130,23 +127,23 @@ parse_input(const std::string& key, const json& value, const Source& source)
             else if (item.key() == "channels" && item.value().is_string())
                 arg.channels = item.value().get<std::string>();
             else if (item.key() == "path" || item.key() == "channels")
-                fail(format("\"{}\": \"{}\" must be a string, not {}", key,
+                fail_escaped(format("\"{}\": \"{}\" must be a string, not {}", key,
                             item.key(), shown(item.value())));
             else
-                fail(format("\"{}\": unknown key \"{}\" (known: path, "
+                fail_escaped(format("\"{}\": unknown key \"{}\" (known: path, "
                             "channels)",
                             key, item.key()));
         }
     } else {
-        fail(format("\"{}\" must be a file name or {{\"path\": ..., "
+        fail_escaped(format("\"{}\" must be a file name or {{\"path\": ..., "
                     "\"channels\": ...}}, not {}",
                     key, shown(value)));
     }
     if (arg.path.empty())
-        fail(format("\"{}\" names no file (\"path\" is missing or empty)",
+        fail_escaped(format("\"{}\" names no file (\"path\" is missing or empty)",
                     key));
     if (source.rules && is_recipe_path(arg.path))
-        fail(format("\"{}\" is '{}', itself a recipe: a recipe's inputs must "
+        fail_escaped(format("\"{}\" is '{}', itself a recipe: a recipe's inputs must "
                     "be images, not recipes",
                     key, arg.path));
     arg.path = confined(key, arg.path, source);
@@ -158,7 +155,7 @@ double
 parse_number(const std::string& key, const json& value)
 {
     if (!value.is_number())
-        fail(format("\"{}\" must be a number, not {}", key, shown(value)));
+        fail_escaped(format("\"{}\" must be a number, not {}", key, shown(value)));
     return value.get<double>();
 }
 
@@ -169,7 +166,7 @@ parse_float(const std::string& key, const json& value)
 {
     const double v = parse_number(key, value);
     if (!(std::fabs(v) <= double(std::numeric_limits<float>::max())))
-        fail(format("\"{}\" is out of range: {}", key, shown(value)));
+        fail_escaped(format("\"{}\" is out of range: {}", key, shown(value)));
     return float(v);
 }
 
@@ -178,7 +175,7 @@ parse_whole_number(const std::string& key, const json& value)
 {
     double v = parse_number(key, value);
     if (v != std::floor(v) || std::fabs(v) > 1e6)
-        fail(format("\"{}\" must be a whole number, not {}", key,
+        fail_escaped(format("\"{}\" must be a whole number, not {}", key,
                     shown(value)));
     return int(v);
 }
@@ -209,14 +206,14 @@ apply_overrides(json& recipe,
         try {
             (void)json(text).dump();
         } catch (const json::exception&) {
-            fail(format("argument '{}' is not UTF-8 text", key));
+            fail_escaped(format("argument '{}' is not UTF-8 text", key));
         }
         if (key == kVersionKey || (option && !option->in_file_name))
-            fail(format("argument '{}' cannot be given after the '?'; edit "
+            fail_escaped(format("argument '{}' cannot be given after the '?'; edit "
                         "the recipe",
                         key));
         if (!option)
-            fail(format("unknown argument '{}' after the '?' (known: {})", key,
+            fail_escaped(format("unknown argument '{}' after the '?' (known: {})", key,
                         known_keys(true)));
         switch (option->kind) {
         case Kind::Flag:
@@ -225,18 +222,18 @@ apply_overrides(json& recipe,
             else if (text == "0" || text == "false")
                 recipe[key] = false;
             else
-                fail(format("argument {}={} must be 1, 0, true or false", key,
+                fail_escaped(format("argument {}={} must be 1, 0, true or false", key,
                             text));
             break;
         case Kind::Whole:
             if (!parse_whole(text, whole))
-                fail(format("argument {}={} must be a whole number", key,
+                fail_escaped(format("argument {}={} must be a whole number", key,
                             text));
             recipe[key] = whole;
             break;
         case Kind::Real:
             if (!parse_real(text, real))
-                fail(format("argument {}={} must be a number", key, text));
+                fail_escaped(format("argument {}={} must be a number", key, text));
             recipe[key] = real;
             break;
         default: recipe[key] = text;
@@ -250,7 +247,7 @@ std::string
 parse_string(const std::string& key, const json& value, bool name)
 {
     if (!value.is_string() || (name && value.get<std::string>().empty()))
-        fail(format(name ? "\"{}\" must be a name in a string, not {}"
+        fail_escaped(format(name ? "\"{}\" must be a name in a string, not {}"
                          : "\"{}\" must be a string, not {}",
                     key, shown(value)));
     return value.get<std::string>();
@@ -270,14 +267,14 @@ parse_option(const Option& option, const json& value, const Source& source,
         break;
     case Kind::Halves:
         if (!value.is_array() || value.size() != 2)
-            fail(format("\"halves\" must be a list of two inputs, not {}",
+            fail_escaped(format("\"halves\" must be a list of two inputs, not {}",
                         shown(value)));
         command.job.half_a = parse_input(key, value[0], source);
         command.job.half_b = parse_input(key, value[1], source);
         break;
     case Kind::Flag:
         if (!value.is_boolean())
-            fail(format("\"{}\" must be true or false, not {}", key,
+            fail_escaped(format("\"{}\" must be true or false, not {}", key,
                         shown(value)));
         std::get<Field<bool>>(option.field)(command) = value.get<bool>();
         break;
@@ -292,12 +289,12 @@ parse_option(const Option& option, const json& value, const Source& source,
     }
     case Kind::Layers: {
         if (!value.is_array())
-            fail(format("\"layers\" must be a list of "
+            fail_escaped(format("\"layers\" must be a list of "
                         "\"NAME=RADIANCE:ALBEDO[:divided][:reflected]\", not {}",
                         shown(value)));
         if (source.rules && source.rules->max_layers
             && value.size() > size_t(source.rules->max_layers))
-            fail(format("\"layers\" lists {} layers: more than the {} a "
+            fail_escaped(format("\"layers\" lists {} layers: more than the {} a "
                         "recipe may ({}=layers=N allows more)",
                         value.size(), source.rules->max_layers,
                         kRecipeLimitsVariable));
@@ -307,7 +304,7 @@ parse_option(const Option& option, const json& value, const Source& source,
             layers.emplace_back();
             if (!layer.is_string()
                 || !parse_layer(layer.get<std::string>(), layers.back()))
-                fail(format("\"layers\": each must be "
+                fail_escaped(format("\"layers\": each must be "
                             "\"NAME=RADIANCE:ALBEDO[:divided][:reflected]\", not {}",
                             shown(layer)));
         }
@@ -321,7 +318,7 @@ parse_option(const Option& option, const json& value, const Source& source,
                                 std::get<Field<Mode>>(option.field)(command))
                    : parse_data_type(
                        text, std::get<Field<TypeDesc>>(option.field)(command))))
-            fail(format("\"{}\" must be {}, not {}", key,
+            fail_escaped(format("\"{}\" must be {}, not {}", key,
                         mode ? "\"beauty\", \"layers\" or \"path\""
                              : "\"half\" or \"float\"",
                         shown(value)));
@@ -346,9 +343,9 @@ void
 parse_preset(const std::string& key, const json& value, Command& command)
 {
     if (!value.is_string())
-        fail(format("\"{}\" must be a string, not {}", key, shown(value)));
+        fail_escaped(format("\"{}\" must be a string, not {}", key, shown(value)));
     if (!apply_preset(value.get<std::string>(), command.job.filter))
-        fail(format("unknown preset '{}' (known: {})",
+        fail_escaped(format("unknown preset '{}' (known: {})",
                     value.get<std::string>(), preset_names()));
     command.preset = value.get<std::string>();
 }
@@ -368,19 +365,19 @@ parse(const std::string& text, const std::string& folder,
         size_t bracket  = why.find("] ");
         if (!why.empty() && why.front() == '[' && bracket != std::string::npos)
             why = why.substr(bracket + 2);
-        fail("not valid JSON: " + why);
+        fail_escaped("not valid JSON: " + why);
     }
     if (!recipe.is_object())
-        fail("not a zdenoise recipe: a recipe is a JSON object {...}");
+        fail_escaped("not a zdenoise recipe: a recipe is a JSON object {...}");
     if (!recipe.contains(kVersionKey))
-        fail(format("not a zdenoise recipe: it has no \"{}\": {} line",
+        fail_escaped(format("not a zdenoise recipe: it has no \"{}\": {} line",
                     kVersionKey, kRecipeFormatVersion));
     const json& version = recipe.at(kVersionKey);
     if (!version.is_number_integer() || version.get<int>() < 1)
-        fail(format("\"{}\" must be {}, not {}", kVersionKey,
+        fail_escaped(format("\"{}\" must be {}, not {}", kVersionKey,
                     kRecipeFormatVersion, shown(version)));
     if (version.get<int>() > kRecipeFormatVersion)
-        fail(format("written for a newer zdenoise (format {}; this one reads "
+        fail_escaped(format("written for a newer zdenoise (format {}; this one reads "
                     "format {})",
                     version.get<int>(), kRecipeFormatVersion));
     apply_overrides(recipe, overrides);
@@ -396,18 +393,18 @@ parse(const std::string& text, const std::string& folder,
             continue;
         const Option* option = find_key(item.key());
         if (!option)
-            fail(format("unknown key \"{}\" (known: {})", item.key(),
+            fail_escaped(format("unknown key \"{}\" (known: {})", item.key(),
                         known_keys(false)));
         parse_option(*option, item.value(), source, command);
     }
     const std::string invalid = validate(command.job, Spelling::Recipe);
     if (!invalid.empty())
-        fail(invalid);
+        fail_escaped(invalid);
     const std::string frame = frame_problem(command.job);
     if (!frame.empty())
-        fail(frame);
+        fail_escaped(frame);
     if (rules.max_rmax && command.job.filter.r_max > rules.max_rmax)
-        fail(format("\"rmax\" is {}: more than the {} a recipe may ask for "
+        fail_escaped(format("\"rmax\" is {}: more than the {} a recipe may ask for "
                     "({}=rmax=N allows more)",
                     command.job.filter.r_max, rules.max_rmax,
                     kRecipeLimitsVariable));
@@ -447,7 +444,7 @@ nlohmann::ordered_json
 input_json(const InputArg& arg, const std::string& folder)
 {
     if (is_recipe_path(arg.path))
-        fail(format("the input '{}' is itself a recipe: a recipe's inputs "
+        fail_escaped(format("the input '{}' is itself a recipe: a recipe's inputs "
                     "must be images, not recipes",
                     arg.path));
     nlohmann::ordered_json value = nlohmann::ordered_json::object();
@@ -544,7 +541,7 @@ set_keyword_options(const json& keywords,
 {
     try {
         if (!keywords.is_object())
-            fail("the options must be an object of names and values");
+            fail_escaped("the options must be an object of names and values");
         auto find = [&](const std::string& name) -> const Option& {
             const Option* option = find_option(name, Spelling::Keyword);
             if (!option || !accepts(*option)) {
@@ -553,7 +550,7 @@ set_keyword_options(const json& keywords,
                     if (o.key && accepts(o))
                         known += (known.empty() ? "" : ", ")
                                  + option_name(o, Spelling::Keyword);
-                fail(format("unknown key \"{}\" (known: {})", name, known));
+                fail_escaped(format("unknown key \"{}\" (known: {})", name, known));
             }
             return *option;
         };

@@ -15,7 +15,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "job.h"
+#include "job_types.h"
 #include "options.h"
 #include "recipe_rules.h"
 

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "input_files.h"
-#include "job.h"
+#include "job_types.h"
 #include "layer_conventions.h"
 
 namespace zdenoise {

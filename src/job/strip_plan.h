@@ -18,11 +18,11 @@
 #include "albedo_plan.h"
 #include "diagnostics_picture.h"
 #include "input_files.h"
-#include "job.h"
+#include "job_types.h"
 #include "layers_plan.h"
 #include "output.h"
 #include "strips.h"
-#include "../../ocio/colour.h"
+#include "ocio/colour.h"
 
 namespace zdenoise {
 namespace job {
@@ -58,6 +58,9 @@ struct Plan {
 struct RoleImages {
     OIIO::ImageBuf radiance, albedo, normal, depth, id, variance, half_a, half_b,
         remodulation, own_albedo, motion;
+    /// The halves' own albedos (their files' Denoising Albedo), which
+    /// measure the albedo's noise (albedo_plan.h).
+    OIIO::ImageBuf half_a_albedo, half_b_albedo;
 };
 
 
@@ -71,32 +74,16 @@ role_as_is(const OptionalRole& o, const Plan& p)
 }
 
 
+/// Strip `strip`'s role images (the files' rows held): those converted to
+/// the working space are copies, the others the files' rows themselves.
+RoleImages
+read_role_images(const Job& j, const Plan& p, const Strip& strip);
+
 /// Convert an image of `arg`'s file between colour spaces (when it is
 /// there and the job manages colour).
 void
 convert_role(const Plan& p, OIIO::ImageBuf& image, const std::string& from,
              const std::string& to, const InputArg& arg);
-
-/// What --temporal combines frames with: the library's defaults, at the
-/// filter's albedo_eps.
-TemporalOptions
-temporal_options(const Job& j);
-
-/// Rows frame t is read with beyond what the filter reads: with
-/// --temporal, the light test's box.
-int
-temporal_reach(const Job& j);
-
-/// --temporal (docs/TEMPORAL.md): frame t's radiance (and albedo, variance
-/// or halves) averaged with its neighbours' light where they show the same
-/// surface and light, over what the filter reads of the strip. Frame t's
-/// images come over that and the light test's box around it; each
-/// neighbour is read over the rows its flow reaches (and the albedo
-/// prefilter's halo), converted and prefiltered as frame t. A flow chains
-/// the motion vectors of the frames between, nearest first.
-void
-combine_neighbours(const Job& j, const Plan& p, InputFiles& files,
-                   const Strip& strip, RoleImages& img, JobResult& result);
 
 }  // namespace job
 }  // namespace zdenoise

@@ -16,7 +16,7 @@
 
 #include <OpenImageIO/strutil.h>
 
-#include "options.h"
+#include "validate.h"
 
 namespace zdenoise {
 namespace job {
@@ -90,6 +90,18 @@ output_is_input(const Job& job, const std::string& output, bool force,
                           spelling == Spelling::Keyword ? "force=True"
                                                         : "--force");
     return "";
+}
+
+std::vector<std::string>
+input_paths(const Job& j)
+{
+    std::vector<std::string> paths;
+    for (const InputArg* a : { &j.in, &j.albedo, &j.normal, &j.depth, &j.id,
+                               &j.variance, &j.half_a, &j.half_b, &j.aux,
+                               &j.motion })
+        if (a->given)
+            paths.push_back(a->path);
+    return paths;
 }
 
 }  // namespace job

@@ -22,10 +22,10 @@
 
 #include <OpenImageIO/strutil.h>
 
-#include "../../src/job/channel_spec.h"
-#include "../../src/job/job.h"
-#include "../../src/job/layer_conventions.h"
-#include "../../src/job/options.h"
+#include "job/channel_spec.h"
+#include "job/job.h"
+#include "job/layer_conventions.h"
+#include "job/options.h"
 
 using namespace zdenoise::job;
 

@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "../../src/job/frames.h"
+#include "job/frames.h"
 
 using namespace zdenoise::job;
 

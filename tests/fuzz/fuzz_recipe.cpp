@@ -20,8 +20,9 @@
 #include <string>
 #include <vector>
 
-#include "../../src/job/job.h"
-#include "../../src/job/recipe.h"
+#include "job/job.h"
+#include "job/recipe.h"
+#include "job/validate.h"
 
 using namespace zdenoise::job;
 
