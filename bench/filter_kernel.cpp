@@ -5,7 +5,7 @@
 // the time per pixel of regression_filter() on synthetic scenes at
 // several noise levels. The adaptive radius makes the cost follow the
 // content: noisier images grow bigger windows, and a window that stops at
-// radius R costs about (4/3) R^3 point visits (docs/PERFORMANCE.md), so the
+// radius R costs about (4/3) R^3 point visits (bench/results/2026-12-performance-log.md), so the
 // counters report the mean radius too.
 //
 //   build/bin/zdenoise_bench_filter                      # all cases

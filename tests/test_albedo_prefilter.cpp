@@ -283,7 +283,7 @@ TEST_F(CliTest, CyclesAlbedoIsPrefilteredWithTheRendersSamples)
     // Today's filter alone fits the light to the albedo it is given; the
     // selection's feature regressions also regress on the albedo, which
     // takes up much of its noise (public set: the prefilter gains up to 24 %
-    // with the selection, docs/SELECTION.md section 11; on this crop it is
+    // with the selection, bench/results/2026-12-selection-log.md section 11; on this crop it is
     // even).
     double with_today = 0.0, without_today = 0.0;
     for (const char* flags : { "", " --no-albedo-prefilter" }) {

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""feature_regression.py - prototype of candidate K5 (docs/SELECTION.md section 8): NFOR-style
+"""feature_regression.py - prototype of candidate K5 (bench/results/2026-12-selection-log.md section 8): NFOR-style
 first-order regression of the quotient on [1, u, v, normal, depth], windows r=9 at stride 3,
 same-object and spatial weights only (so exactly linear: its hat diagonal D is saved too),
 splatted collaboratively. Usage: feature_regression.py SCENE SPP OUT.npy [R]"""

@@ -1,6 +1,6 @@
 #!/bin/sh
 # run.sh SCENE SPP PREFIX: the session-7 selection prototype on one public case, the
-# reference as --aux (docs/SELECTION.md section 8). Writes PREFIX_* in the current folder.
+# reference as --aux (bench/results/2026-12-selection-log.md section 8). Writes PREFIX_* in the current folder.
 set -e
 HERE=$(cd "$(dirname "$0")" && pwd)
 SHARED=${ZDENOISE_SHARED:-$HERE/../../../shared}

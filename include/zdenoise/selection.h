@@ -123,8 +123,9 @@ struct SelectionOptions {
     /// A pixel leaves candidate 0 for candidate k only where the mean risk
     /// difference is below -confidence standard errors of that mean. 0 (the
     /// default): the candidate of least estimated risk (better than 1 on
-    /// average over the public set, not on every case: docs/SELECTION.md
-    /// section 9); more is a prior for candidate 0.
+    /// average over the public set, not on every case:
+    /// bench/results/2026-12-selection-log.md section 9); more is a prior
+    /// for candidate 0.
     float confidence = 0.0f;
     /// Half-size of the box the one-hot choice map is averaged over into
     /// blend weights, so that a change of candidate makes no seam.

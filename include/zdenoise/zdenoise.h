@@ -125,7 +125,8 @@ struct FilterOptions {
     /// (docs/FILTER.md section 13, include/zdenoise/selection.h), the
     /// default: better on every public case, about 1.5x the time and twice
     /// the memory of 0 = today's filter alone, the method's own
-    /// (docs/SELECTION.md section 10).
+    /// (docs/SELECTION.md; bench/results/2026-12-selection-log.md
+    /// section 10).
     int select = 1;
 
     /// Optional progress report with the fraction done in [0,1], called from

@@ -11,6 +11,7 @@
 #include "guide_weight.h"
 #include "noise_estimate.h"
 #include "outliers.h"
+#include "pixel_classes.h"
 
 namespace zdenoise {
 namespace detail {

@@ -159,16 +159,5 @@ decode_filter_inputs(FilterInputs& in, ImageBuf& dst, const ImageBuf& quotient,
                      const ImageBuf& albedo, const Guides& guides,
                      const FilterOptions& opt, ROI region, int nthreads);
 
-/// The pixel classes of section 2 (in.cls), the luminance zl of the fit
-/// points and the inverse depth of the surface pixels, from the RGB
-/// quotient z and albedo (3 floats a pixel), the alpha (empty: none) and
-/// the depth (empty: none) over in.region.
-void
-classify_pixels(FilterInputs& in, const std::vector<float>& z,
-                const std::vector<float>& albedo,
-                const std::vector<float>& alpha,
-                const std::vector<float>& depth, float albedo_eps,
-                int nthreads);
-
 }  // namespace detail
 }  // namespace zdenoise

@@ -5,7 +5,7 @@
 // fit point, receiver channels), the luminance of the fit points and the
 // inverse depth the guide weight reads.
 
-#include "filter_inputs.h"
+#include "pixel_classes.h"
 
 #include <cmath>
 

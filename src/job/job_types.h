@@ -31,9 +31,8 @@ struct InputArg {
 
 /// Beauty: denoise the beauty with the albedo. Layers: denoise each layer
 /// with its albedo and sum them with the residual (layered_denoise()).
-/// Auto: layers when --layer gives them, else beauty (measured on the
-/// public benchmark, docs/LAYERS.md: layers win on cornell_textured but
-/// lose slightly on newspaper and zigzag_steps).
+/// Path: layers of the direct light apart from the rest (docs/LAYERS.md,
+/// "Light by path"). Auto: layers when --layer gives them, else beauty.
 enum class Mode { Auto, Beauty, Layers, Path };
 
 /// What the render's radiance is divided by when an auxiliary image
