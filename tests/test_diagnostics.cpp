@@ -69,28 +69,58 @@ TEST(Diagnostics, RemainingErrorIsHigherWhereTheFrameHadFewerSamples)
     const double noise_many = mean_channel(maps, 2, many0, many1);
     const double error_few = mean_channel(maps, 3, few0, few1);
     const double error_many = mean_channel(maps, 3, many0, many1);
-    std::printf("  noise 4 spp %.4f, 64 spp %.4f; remaining error %.4f, %.4f\n",
-                noise_few, noise_many, error_few, error_many);
-    // 16x the samples: 4x less noise in the input.
-    EXPECT_GT(noise_few, 3.0 * noise_many);
+    const double radius_few = mean_channel(maps, 0, few0, few1);
+    const double radius_many = mean_channel(maps, 0, many0, many1);
+    std::printf("  noise 4 spp %.4f, 64 spp %.4f; remaining error %.4f, %.4f; "
+                "radius %.2f, %.2f\n",
+                noise_few, noise_many, error_few, error_many, radius_few, radius_many);
+    // The noise is estimated from the image; the scene's is known: a pixel
+    // is the mean of spp exponential samples, relative deviation
+    // 1/sqrt(spp) (measured: 0.509 and 0.124).
+    EXPECT_NEAR(noise_few, 1.0 / std::sqrt(4.0), 0.1 / std::sqrt(4.0));
+    EXPECT_NEAR(noise_many, 1.0 / std::sqrt(64.0), 0.1 / std::sqrt(64.0));
+    // The windows grow until their predicted noise reaches eta: larger
+    // where the input has 4x the noise (measured: 13.1 and 4.1).
+    EXPECT_GT(radius_few, 2.0 * radius_many);
     // The filter evens much of it out (its windows grow larger on the
     // left, towards the same target), but the error left is still higher
-    // there (measured: 0.024 and 0.017)...
+    // there (measured: 0.027 and 0.017)...
     EXPECT_GT(error_few, 1.25 * error_many);
     // ... as it truly is: the output's relMSE is higher there too (0.0036
     // and 0.0005: the map's eta is the noise part of the error only, and
     // the bias of low sample counts is not in it; docs/DIAGNOSTICS.md).
     EXPECT_GT(synth::rel_mse(out, s.clean, few0, few1, 0, h),
               2.0 * synth::rel_mse(out, s.clean, many0, many1, 0, h));
-    // Radii and stop codes are what the filter can do.
+    // Stop codes are what the filter can do.
     for (int y = 0; y < h; y += 5)
         for (int x = 0; x < w; x += 3) {
-            const float r = maps.getchannel(x, y, 0, 0);
             const float code = maps.getchannel(x, y, 0, 1);
-            EXPECT_GE(r, float(opt.r_min));
-            EXPECT_LE(r, float(opt.r_max));
             EXPECT_TRUE(code == 1.0f || code == 2.0f || code == 3.0f) << code;
         }
+}
+
+
+TEST(Diagnostics, RadiusIsSmallAtAnEdgeAndLargeOnFlatLight)
+{
+    // A hard shadow edge at 16 spp: the windows at the edge stop there
+    // (stop code 3) and stay small; those on the flat light either side
+    // grow (measured: mean radius 4.4 at the edge, 8.7 and 8.9 beyond
+    // 16 px either side).
+    const synth::Scene s = synth::shadow_edge(128, 48, { 16, 5 });
+    ImageBuf maps;
+    zdenoise::FilterOptions opt;
+    opt.diagnostics = &maps;
+    const ImageBuf out = zdenoise::denoise(s.noisy, s.albedo, {}, opt);
+    ASSERT_FALSE(out.has_error()) << out.geterror();
+    const int e = s.edge_x;
+    const double at_edge = mean_channel(maps, 0, e - 2, e + 2);
+    const double lit = mean_channel(maps, 0, 8, e - 16);
+    const double shadow = mean_channel(maps, 0, e + 16, 120);
+    std::printf("  radius at the edge %.2f, lit %.2f, shadow %.2f\n", at_edge, lit, shadow);
+    EXPECT_LT(at_edge, 0.7 * lit);
+    EXPECT_LT(at_edge, 0.7 * shadow);
+    EXPECT_GT(mean_channel(maps, 1, e - 2, e + 2), 2.5) << "mostly edge stops there";
+    EXPECT_LT(mean_channel(maps, 1, 8, e - 16), 1.1) << "quality stops on the flat light";
 }
 
 
@@ -197,14 +227,44 @@ TEST_F(CliTest, DiagnosticsAddChannelsAndAPicture)
                           plain.getchannel(x, y, 0, c))
                     << plain.spec().channelnames[c];
     }
-    const int error = maps.spec().channelindex("zdenoise.error");
-    double mean     = 0.0;
-    for (int y = 0; y < maps.spec().height; ++y)
-        for (int x = 0; x < maps.spec().width; ++x)
-            mean += maps.getchannel(x, y, 0, error);
-    mean /= double(maps.spec().width) * maps.spec().height;
-    EXPECT_GT(mean, 0.001);
-    EXPECT_LT(mean, 0.2);
+    // The maps' values, on a frame whose noise is known: a fine texture at
+    // 16 spp, each pixel the mean of 16 exponential samples (relative
+    // deviation 1/4). The noise map estimates that; the error map is the
+    // predicted noise of the windows, which stop growing when it reaches
+    // --eta (0.02): about that where they stopped so (stop code 1; a pixel
+    // mixes the windows that reached it, a few stopped otherwise), and
+    // more than half of it, since the radius before (half as large) had
+    // not reached it (measured: noise 0.258, error 0.0201).
+    const synth::Scene s = synth::fine_texture(96, 64, { 16, 9 });
+    ASSERT_TRUE(s.noisy.write(path("synth.exr"))) << s.noisy.geterror();
+    ASSERT_TRUE(s.albedo.write(path("synth_albedo.exr"))) << s.albedo.geterror();
+    r = run("--in '" + path("synth.exr") + "' --albedo '" + path("synth_albedo.exr")
+            + "' -o '" + path("synth_maps.exr") + "' --diagnostics");
+    ASSERT_EQ(r.status, 0) << r.err;
+    ImageBuf synth_maps(path("synth_maps.exr"));
+    ASSERT_TRUE(synth_maps.read(0, 0, true, TypeFloat)) << synth_maps.geterror();
+    const int stop = synth_maps.spec().channelindex("zdenoise.stop");
+    const int noise = synth_maps.spec().channelindex("zdenoise.noise");
+    const int error = synth_maps.spec().channelindex("zdenoise.error");
+    double noise_mean = 0.0, error_mean = 0.0;
+    int quality = 0;
+    for (int y = 0; y < s.h; ++y)
+        for (int x = 0; x < s.w; ++x) {
+            noise_mean += synth_maps.getchannel(x, y, 0, noise);
+            if (synth_maps.getchannel(x, y, 0, stop) == 1.0f) {
+                error_mean += synth_maps.getchannel(x, y, 0, error);
+                ++quality;
+            }
+        }
+    noise_mean /= double(s.w) * s.h;
+    error_mean /= quality;
+    std::printf("  16 spp: noise %.4f (1/4 true), error %.4f where the windows "
+                "stopped at eta (%d of %d pixels)\n",
+                noise_mean, error_mean, quality, s.w * s.h);
+    EXPECT_NEAR(noise_mean, 0.25, 0.025);
+    EXPECT_GT(quality, s.w * s.h / 2);
+    EXPECT_GT(error_mean, 0.5 * 0.02);
+    EXPECT_LT(error_mean, 1.2 * 0.02);
 
     // The picture: the frame, with the legend in a band below it.
     ImageBuf png(path("error.png"));
@@ -218,8 +278,9 @@ TEST_F(CliTest, DiagnosticsAddChannelsAndAPicture)
     png.getpixel(8, bar_y, dark);
     png.getpixel(png.spec().width - 8, bar_y, bright);
     EXPECT_LT(dark[0] + dark[1] + dark[2], bright[0] + bright[1] + bright[2]);
-    EXPECT_EQ(files(), (std::vector<std::string> { "error.png", "maps.exr",
-                                                   "plain.exr" }));
+    EXPECT_EQ(files(), (std::vector<std::string> { "error.png", "maps.exr", "plain.exr",
+                                                   "synth.exr", "synth_albedo.exr",
+                                                   "synth_maps.exr" }));
 }
 
 
