@@ -4,19 +4,25 @@
 // regression_filter() with FilterOptions::select = 1 (docs/FILTER.md
 // section 13): today's filter and two feature regressions, and the
 // per-pixel choice among them by their estimated error. Stages, in order:
-//   regression_filter()    candidate 0, today's filter, its maps and its
-//                          hat diagonal D
-//   decode_filter_inputs() what the feature regressions fit (outliers
-//                          capped), the outliers' spread light, and
-//                          radiance_bounds() of their output
-//   residual_bounded_variance()  without halves: the noise for SURE and
+//   run_candidate0()       one decode_filter_inputs() for what follows:
+//     filter_candidate0()  candidate 0, today's filter, its maps and its
+//                          hat diagonal D                         (13.1)
+//     read_fit_points()    what the feature regressions fit (outliers
+//                          capped), the noise, the outliers' spread light
+//     radiance_bounds()    the bounds of their output (radiance_bounds.cpp)
+//     residual_bounded_variance()  without halves: the noise for SURE and
 //                          the pilot, at most what candidate 0's residuals
-//                          allow
-//   filter_halves()        with halves: every candidate on each half alone
-//   feature_regression()   candidates 1 and 2, candidate 0 as their pilot
-//   sure_risk() or halves_risk()  each candidate's risk, relative-MSE
-//                          weighted
-//   select_by_risk()       the choice map and the blend
+//                          allow                                  (13.3)
+//   make_pilot()           candidate 0 and the variance of its light; with
+//                          halves, filter_halves(): every candidate on
+//                          each half alone                        (13.3)
+//   filter_features()      candidates 1 and 2, candidate 0 their pilot,
+//                          within radiance_bounds()               (13.2)
+//   risk_inputs(), candidate_risks()  each candidate's risk, sure_risk()
+//                          or halves_risk(), relative-MSE weighted (13.3)
+//   select_by_risk()       the choice map and the blend           (13.4)
+//   write_selected()       candidate 0 with the chosen RGB at the fit
+//                          points
 
 #include "selected_filter.h"
 
@@ -32,6 +38,7 @@
 
 #include "filter_inputs.h"
 #include "internal.h"
+#include "radiance_bounds.h"
 
 namespace zdenoise {
 namespace detail {
@@ -99,97 +106,6 @@ feature_candidates()
         return std::vector<FeatureRegressionOptions> { nfor, wide };
     }();
     return table;
-}
-
-/// The least and the most of the elements within r of each of n elements
-/// (stride apart), the window clipped at both ends, by van Herk and
-/// Gil-Werman's block prefixes and suffixes: three comparisons an element
-/// whatever r. Exact, so any order gives the same floats.
-struct SlidingExtrema {
-    std::vector<float> prefix_lo, prefix_hi, suffix_lo, suffix_hi;
-    void run(const float* lo, const float* hi, int n, size_t stride, int r,
-             float* out_lo, float* out_hi)
-    {
-        const float inf = std::numeric_limits<float>::infinity();
-        const int k = 2 * r + 1, m = n + 2 * r;  // padded by r on each side
-        prefix_lo.resize(size_t(m)), prefix_hi.resize(size_t(m));
-        suffix_lo.resize(size_t(m)), suffix_hi.resize(size_t(m));
-        auto at_lo = [&](int i) { return i < r || i >= r + n ? inf : lo[size_t(i - r) * stride]; };
-        auto at_hi = [&](int i) { return i < r || i >= r + n ? -inf : hi[size_t(i - r) * stride]; };
-        for (int i = 0; i < m; ++i) {
-            const bool start = i % k == 0;
-            prefix_lo[size_t(i)] = start ? at_lo(i) : std::min(prefix_lo[size_t(i) - 1], at_lo(i));
-            prefix_hi[size_t(i)] = start ? at_hi(i) : std::max(prefix_hi[size_t(i) - 1], at_hi(i));
-        }
-        for (int i = m - 1; i >= 0; --i) {
-            const bool end = i % k == k - 1 || i == m - 1;
-            suffix_lo[size_t(i)] = end ? at_lo(i) : std::min(suffix_lo[size_t(i) + 1], at_lo(i));
-            suffix_hi[size_t(i)] = end ? at_hi(i) : std::max(suffix_hi[size_t(i) + 1], at_hi(i));
-        }
-        // Element i's window is [i, i + 2r] of the padded array.
-        for (int i = 0; i < n; ++i) {
-            out_lo[i] = std::min(suffix_lo[size_t(i)], prefix_lo[size_t(i + 2 * r)]);
-            out_hi[i] = std::max(suffix_hi[size_t(i)], prefix_hi[size_t(i + 2 * r)]);
-        }
-    }
-};
-
-/// The bounds of the feature regressions' output at each pixel of `out`
-/// (docs/FILTER.md section 13.2): per channel, the least and the most
-/// radiance of the fit points within r_max (the largest window of today's
-/// filter; a Chebyshev square, min and max by rows then columns), and the
-/// pixel's 1 / (La + albedo_eps) (0 where not demodulated). A window of
-/// the wider feature regression reaches 2 x 15 pixels, and its linear model
-/// in the normal extrapolates across facets: without these bounds it put
-/// light 1.2x brighter than any within 16 pixels on zigzag_steps.
-void
-radiance_bounds(const FilterInputs& in, const ROI& out, int r_max,
-                std::vector<float>& lo, std::vector<float>& hi,
-                std::vector<float>& inv_albedo, int nthreads)
-{
-    const float inf = std::numeric_limits<float>::infinity();
-    const ROI rows(out.xbegin, out.xend, std::max(out.ybegin - r_max, in.region.ybegin),
-                   std::min(out.yend + r_max, in.region.yend));
-    const size_t w = size_t(out.width()), n = out.npixels();
-    const int rw = in.region.width();
-    // Per channel: the extremes over each row's window, rows.height() rows
-    // of w, then over the columns of those.
-    std::vector<float> rlo(3 * w * size_t(rows.height())), rhi(rlo.size());
-    for_rows(rows, nthreads, [&](int y) {
-        const size_t nrow = size_t(rw);
-        std::vector<float> vlo(nrow), vhi(nrow), elo(nrow), ehi(nrow);
-        SlidingExtrema ext;
-        for (int c = 0; c < 3; ++c) {
-            for (int u = 0; u < rw; ++u) {
-                const size_t i = in.index(in.region.xbegin + u, y);
-                const bool fit = (in.cls[i] & kFitPoint) != 0;
-                vlo[size_t(u)] = fit ? in.lfit[c][i] : inf;
-                vhi[size_t(u)] = fit ? in.lfit[c][i] : -inf;
-            }
-            ext.run(vlo.data(), vhi.data(), rw, 1, r_max, elo.data(), ehi.data());
-            const size_t k = (size_t(c) * size_t(rows.height()) + size_t(y - rows.ybegin)) * w;
-            std::copy_n(&elo[size_t(out.xbegin - in.region.xbegin)], w, &rlo[k]);
-            std::copy_n(&ehi[size_t(out.xbegin - in.region.xbegin)], w, &rhi[k]);
-        }
-    });
-    lo.assign(3 * n, inf);
-    hi.assign(3 * n, -inf);
-    inv_albedo.assign(3 * n, 0.0f);
-    const int rh = rows.height();
-    parallel_for(int64_t(0), int64_t(3 * w), [&](int64_t col) {
-        const size_t c = size_t(col) / w, x = size_t(col) % w;
-        const size_t ncol = size_t(rh);
-        std::vector<float> elo(ncol), ehi(ncol);
-        SlidingExtrema ext;
-        const size_t first = c * size_t(rh) * w + x;
-        ext.run(&rlo[first], &rhi[first], rh, w, r_max, elo.data(), ehi.data());
-        for (int y = out.ybegin; y < out.yend; ++y) {
-            const size_t k = 3 * (size_t(y - out.ybegin) * w + x) + c;
-            lo[k] = elo[size_t(y - rows.ybegin)];
-            hi[k] = ehi[size_t(y - rows.ybegin)];
-            inv_albedo[k] = in.inv_albedo[c][in.index(out.xbegin + int(x), y)];
-        }
-    }, paropt_any_length(nthreads));
 }
 
 /// The largest halo of the feature-regression candidates.
@@ -265,45 +181,124 @@ residual_bounded_variance(const FilterInputs& in, const ROI& pil,
     return sigma2;
 }
 
-/// The candidates run on each half's quotient alone (FILTER.md 13.3):
-/// candidate 0 over `pil` with its own noise estimate, then the feature
-/// regressions `fos` over `sel`, each with that half's candidate 0 as
-/// pilot and the pilot variance (F0(A)_l - F0(B)_l)^2 / 2 (two filtered
-/// halves differ by twice a half's filter variance), fitting the half's
-/// quotient at the fit points (`s` > 0). Also returns that squared
-/// difference over pil (0 where s is 0), and each half's quotient over
-/// `qreg`.
-bool
-filter_halves(ImageBuf& dst, const ImageBuf& albedo, const Guides& guides,
-              const FilterOptions& base,
-              const std::function<std::function<void(float)>(float, float)>& progress,
-              const std::vector<FeatureRegressionOptions>& fos, const ROI& sel,
-              const ROI& pil, const ROI& qreg, const std::vector<float>& s,
-              ImageBuf half_z[2], ImageBuf half_out0[2],
-              std::vector<ImageBuf> half_out1[2], std::vector<float>& dif2,
-              int nthreads)
-{
-    const ROI& frame = base.frame;
-    const size_t np  = pil.npixels();
-    auto fail = [&](const ImageBuf& from) {
+/// What the stages share: the arguments, candidate 0's options (select 0),
+/// the feature candidates', the choice's, and the regions each stage runs
+/// over, each holding the next one's halo (FILTER.md 13.5).
+struct Selection {
+    ImageBuf& dst;
+    const ImageBuf& quotient;
+    const ImageBuf& albedo;
+    const Guides& guides;
+    const FilterOptions& options;
+    int nthreads;
+    FilterOptions base;
+    std::vector<FeatureRegressionOptions> fos;
+    SelectionOptions so;
+    bool halves;  ///< the risks from halves_risk(), else sure_risk()
+    ROI roi;      ///< the output pixels
+    ROI sel;      ///< the choice's support: the risks, candidates 1 and 2
+    ROI pil;      ///< the pilot's: candidate 0 as candidates 1 and 2 read it
+    ROI k0reg;    ///< candidate 0's: pil and its noise bound's box
+    ROI qreg;     ///< the decoded inputs': k0reg and the filter's halo
+
+    Selection(ImageBuf& dst_, const ImageBuf& quotient_, const ImageBuf& albedo_,
+              const Guides& guides_, const FilterOptions& options_, ROI roi_,
+              int nthreads_)
+        : dst(dst_), quotient(quotient_), albedo(albedo_), guides(guides_)
+        , options(options_), nthreads(nthreads_), base(options_)
+        , fos(feature_candidates()), halves(guides_.half_a && guides_.half_b)
+        , roi(roi_)
+    {
+        const ROI& frame = options.frame;
+        base.select      = 0;
+        for (FeatureRegressionOptions& f : fos) {
+            f.frame      = frame;
+            f.albedo_eps = options.albedo_eps;
+        }
+        so.frame = frame;
+        if (halves)
+            so.confidence = kHalvesConfidence;
+        sel   = halo_region(roi, frame, selection_halo(so));
+        pil   = halo_region(sel, frame, feature_candidates_halo());
+        k0reg = halo_region(pil, frame, kVarianceRadius);
+        qreg  = halo_region(k0reg, frame, filter_halo(base));
+        sel.chbegin = pil.chbegin = k0reg.chbegin = qreg.chbegin = roi.chbegin = 0;
+        sel.chend = pil.chend = k0reg.chend = qreg.chend = roi.chend
+            = quotient.nchannels();
+    }
+
+    /// dst takes the error of the stage's image `from`.
+    bool fail(const ImageBuf& from) const
+    {
         dst.errorfmt("{}", from.geterror());
         return false;
-    };
-    Guides own   = guides;  // each half estimates its own noise
+    }
+
+    /// A stage's progress, mapped to [lo, hi] of the whole.
+    std::function<void(float)> progress(float lo, float hi) const
+    {
+        if (!options.progress)
+            return nullptr;
+        const FilterOptions* o = &options;
+        return [o, lo, hi](float f) { o->progress(lo + (hi - lo) * f); };
+    }
+};
+
+/// Candidate 0's run, and what the stages after it read of it and of the
+/// decoded inputs.
+struct Candidate0 {
+    ImageBuf out0, maps, hat0;
+    std::vector<float> o0;     ///< its RGB over pil
+    std::vector<float> o0_l;   ///< its light (luminance) over k0reg
+    std::vector<float> d0_k0;  ///< its hat diagonal over k0reg (1 with halves)
+    /// Its noise estimate (section 3) over pil: the standard deviation of
+    /// z_l at fit points, else 0 (no observation).
+    std::vector<float> s;
+    /// What the feature regressions fit over pil: the quotient of the fit
+    /// points with the outliers capped (section 3a), NaN elsewhere, as
+    /// candidate 0 fits it.
+    std::vector<float> zfit;
+    std::vector<double> spread;  ///< the outliers' spread light over sel
+    std::vector<float> bound_lo, bound_hi, bound_ia;  ///< radiance_bounds()
+    std::vector<float> sigma2;  ///< without halves: the bounded noise over pil
+};
+
+/// Every candidate run on each half alone, for halves_risk().
+struct HalvesRun {
+    ImageBuf z[2], out0[2];
+    std::vector<ImageBuf> out1[2];
+};
+
+/// The candidates run on each half's quotient alone (FILTER.md 13.3):
+/// candidate 0 over `pil` with its own noise estimate, then the feature
+/// regressions over `sel`, each with that half's candidate 0 as pilot and
+/// the pilot variance (F0(A)_l - F0(B)_l)^2 / 2 (two filtered halves
+/// differ by twice a half's filter variance), fitting the half's quotient
+/// at the fit points (`s` > 0). Also returns that squared difference over
+/// pil (0 where s is 0), and each half's quotient over `qreg`.
+bool
+filter_halves(const Selection& S, const std::vector<float>& s, HalvesRun& h,
+              std::vector<float>& dif2)
+{
+    const ROI& frame = S.base.frame;
+    const ROI& pil   = S.pil;
+    const size_t np  = pil.npixels();
+    const int nthreads = S.nthreads;
+    Guides own   = S.guides;  // each half estimates its own noise
     own.half_a   = own.half_b = nullptr;
     own.variance = nullptr;
-    const ImageBuf* half[2] = { guides.half_a, guides.half_b };
+    const ImageBuf* half[2] = { S.guides.half_a, S.guides.half_b };
     std::vector<float> o[2];
     for (int k = 0; k < 2; ++k) {
-        if (!demodulate(half_z[k], *half[k], albedo, base.albedo_eps, qreg,
+        if (!demodulate(h.z[k], *half[k], S.albedo, S.base.albedo_eps, S.qreg,
                         nthreads))
-            return fail(half_z[k]);
-        FilterOptions opt = base;
-        opt.progress      = progress(0.3f + 0.25f * float(k), 0.55f + 0.25f * float(k));
-        if (!regression_filter(half_out0[k], half_z[k], albedo, own, opt, nullptr,
+            return S.fail(h.z[k]);
+        FilterOptions opt = S.base;
+        opt.progress      = S.progress(0.3f + 0.25f * float(k), 0.55f + 0.25f * float(k));
+        if (!regression_filter(h.out0[k], h.z[k], S.albedo, own, opt, nullptr,
                                pil, nthreads))
-            return fail(half_out0[k]);
-        o[k] = read_channels(half_out0[k], pil, 0, 3);
+            return S.fail(h.out0[k]);
+        o[k] = read_channels(h.out0[k], pil, 0, 3);
     }
     dif2.assign(np, 0.0f);
     for_ranges(np, nthreads, [&](size_t b, size_t e) {
@@ -314,7 +309,7 @@ filter_halves(ImageBuf& dst, const ImageBuf& albedo, const Guides& guides,
             }
     });
     for (int k = 0; k < 2; ++k) {
-        const std::vector<float> z = read_channels(half_z[k], pil, 0, 3);
+        const std::vector<float> z = read_channels(h.z[k], pil, 0, 3);
         std::vector<float> pv(4 * np), fz(3 * np, NAN);
         for_ranges(np, nthreads, [&](size_t b, size_t e) {
             for (size_t i = b; i < e; ++i) {
@@ -329,12 +324,306 @@ filter_halves(ImageBuf& dst, const ImageBuf& albedo, const Guides& guides,
         ImageBuf pilot = float_image(pil, frame, 4), fitted = float_image(pil, frame, 3);
         store(pilot, pil, pv);
         store(fitted, pil, fz);
-        half_out1[k].resize(fos.size());
-        for (size_t f = 0; f < fos.size(); ++f)
-            if (!feature_regression(half_out1[k][f], fitted, albedo, pilot, own,
-                                    fos[f], sel, nthreads))
-                return fail(half_out1[k][f]);
+        h.out1[k].resize(S.fos.size());
+        for (size_t f = 0; f < S.fos.size(); ++f)
+            if (!feature_regression(h.out1[k][f], fitted, S.albedo, pilot, own,
+                                    S.fos[f], S.sel, nthreads))
+                return S.fail(h.out1[k][f]);
     }
+    return true;
+}
+
+/// Candidate 0 over k0reg (FILTER.md 13.1), with its maps if asked for
+/// and, without halves, its hat diagonal for SURE; its statistics are the
+/// output pixels' (roi), as without select. Reads back its RGB over pil,
+/// and its light and D over k0reg.
+bool
+filter_candidate0(Selection& S, const FilterInputs& in, FilterStats& totals,
+                  Candidate0& c0, std::vector<double>& k0spread)
+{
+    const ROI& frame = S.options.frame;
+    ROI r0           = S.k0reg;
+    if (!prepare_dst(c0.out0, S.quotient, r0, "regression_filter")
+        || (S.options.diagnostics
+            && !prepare_diagnostics(c0.out0, c0.maps, S.k0reg, frame,
+                                    "regression_filter"))
+        || (!S.halves
+            && !prepare_result(c0.out0, c0.hat0, S.k0reg, frame, 1,
+                               "regression_filter", "hat diagonal")))
+        return S.fail(c0.out0);
+    S.base.diagnostics = S.options.diagnostics ? &c0.maps : nullptr;
+    S.base.progress    = S.progress(0.0f, S.halves ? 0.3f : 0.6f);
+    if (!filter_decoded(c0.out0, S.quotient, in, S.base, S.k0reg, S.roi,
+                        S.nthreads, totals, S.halves ? nullptr : &c0.hat0,
+                        &k0spread))
+        return S.fail(c0.out0);
+    S.base.diagnostics = nullptr;
+    c0.o0   = read_channels(c0.out0, S.pil, 0, 3);
+    c0.o0_l = read_channels(c0.out0, S.k0reg, 0, 3);
+    {
+        std::vector<float> l(S.k0reg.npixels());
+        for_ranges(l.size(), S.nthreads, [&](size_t b, size_t e) {
+            for (size_t k = b; k < e; ++k)
+                l[k] = luminance(&c0.o0_l[3 * k]);
+        });
+        c0.o0_l = std::move(l);
+    }
+    c0.d0_k0 = S.halves ? std::vector<float>(S.k0reg.npixels(), 1.0f)
+                        : read_channels(c0.hat0, S.k0reg, 0, 1);
+    return true;
+}
+
+/// From the decoded inputs: the noise and what the feature regressions fit
+/// at pil's fit points, and over sel the outliers' spread light, candidate
+/// 0's (each pixel's sum is the same over any region that holds it).
+void
+read_fit_points(const Selection& S, const FilterInputs& in,
+                const std::vector<double>& k0spread, Candidate0& c0)
+{
+    const ROI &pil = S.pil, &sel = S.sel, &k0reg = S.k0reg;
+    for_rows(pil, S.nthreads, [&](int y) {
+        for (int x = pil.xbegin; x < pil.xend; ++x) {
+            const size_t i = in.index(x, y);
+            const size_t k = size_t(y - pil.ybegin) * size_t(pil.width())
+                             + size_t(x - pil.xbegin);
+            if (in.cls[i] & kFitPoint) {
+                c0.s[k] = std::sqrt(std::max(in.vs[i], 0.0f));
+                for (int c = 0; c < 3; ++c)
+                    c0.zfit[3 * k + size_t(c)] = in.zfit[c][i];
+            }
+        }
+    });
+    for_rows(sel, S.nthreads, [&](int y) {
+        const size_t k  = size_t(y - sel.ybegin) * size_t(sel.width());
+        const size_t k0 = size_t(y - k0reg.ybegin) * size_t(k0reg.width())
+                          + size_t(sel.xbegin - k0reg.xbegin);
+        std::copy_n(&k0spread[3 * k0], 3 * size_t(sel.width()), &c0.spread[3 * k]);
+    });
+}
+
+/// One decode of the inputs over qreg (it holds the receivers of every
+/// outlier within r_max of the selection's pixels and the noise estimate's
+/// footprint) for candidate 0 and the selection's own stages: candidate 0,
+/// the fit points, radiance_bounds() over sel and, without halves,
+/// residual_bounded_variance() over pil.
+bool
+run_candidate0(Selection& S, FilterStats& totals, Candidate0& c0)
+{
+    const size_t np = S.pil.npixels();
+    c0.s.assign(np, 0.0f);
+    c0.zfit.assign(3 * np, NAN);
+    c0.spread.assign(3 * S.sel.npixels(), 0.0);
+    FilterInputs in;
+    if (!decode_filter_inputs(in, S.dst, S.quotient, S.albedo, S.guides, S.base,
+                              S.qreg, S.nthreads))
+        return false;
+    std::vector<double> k0spread;
+    if (!filter_candidate0(S, in, totals, c0, k0spread))
+        return false;
+    read_fit_points(S, in, k0spread, c0);
+    radiance_bounds(in, S.sel, S.base.r_max, c0.bound_lo, c0.bound_hi,
+                    c0.bound_ia, S.nthreads);
+    if (!S.halves)
+        c0.sigma2 = residual_bounded_variance(in, S.pil, S.k0reg, c0.o0_l,
+                                              c0.d0_k0, c0.s, S.nthreads);
+    return true;
+}
+
+/// The feature regressions' pilot over pil: candidate 0's RGB and the
+/// variance of its luminance. With halves, from every candidate run on each
+/// half alone (their cross errors rank them with no noise estimate and no
+/// D); without, from candidate 0's hat diagonal and the bounded noise.
+bool
+make_pilot(const Selection& S, const Candidate0& c0, HalvesRun& h,
+           ImageBuf& pilot)
+{
+    const ROI &pil = S.pil, &k0reg = S.k0reg;
+    const size_t np = pil.npixels();
+    std::vector<float> pilot_var(np);
+    if (S.halves) {
+        std::vector<float> dif2;
+        if (!filter_halves(S, c0.s, h, dif2))
+            return false;
+        // E (F(A) - F(B))^2 = 2 Var F(half) ~ 4 Var F((A + B) / 2).
+        for (size_t i = 0; i < np; ++i)
+            pilot_var[i] = 0.25f * dif2[i];
+    } else {
+        // sum_j H_qj^2 sigma_j^2 ~ D sigma^2.
+        for_rows(pil, S.nthreads, [&](int y) {
+            for (int x = pil.xbegin; x < pil.xend; ++x) {
+                const size_t i = size_t(y - pil.ybegin) * size_t(pil.width())
+                                 + size_t(x - pil.xbegin);
+                const float d = c0.d0_k0[size_t(y - k0reg.ybegin) * size_t(k0reg.width())
+                                         + size_t(x - k0reg.xbegin)];
+                pilot_var[i] = c0.sigma2[i] * std::min(std::max(d, 0.0f), 1.0f);
+            }
+        });
+    }
+    pilot = float_image(pil, S.options.frame, 4);
+    std::vector<float> pv(4 * np);
+    for_ranges(np, S.nthreads, [&](size_t b, size_t e) {
+        for (size_t i = b; i < e; ++i) {
+            for (int c = 0; c < 3; ++c)
+                pv[4 * i + c] = c0.o0[3 * i + c];
+            pv[4 * i + 3] = pilot_var[i];
+        }
+    });
+    store(pilot, pil, pv);
+    return true;
+}
+
+/// Candidates 1 and 2 over sel (FILTER.md 13.2): the feature regressions
+/// of zfit, bounded by the radiance around each pixel, and the outliers'
+/// light added.
+bool
+filter_features(const Selection& S, Candidate0& c0, const ImageBuf& pilot,
+                std::vector<ImageBuf>& out1)
+{
+    const ROI &pil = S.pil, &sel = S.sel;
+    const std::vector<float>&bound_lo = c0.bound_lo, &bound_hi = c0.bound_hi,
+                            &bound_ia = c0.bound_ia;
+    ImageBuf fitted = float_image(pil, S.options.frame, 3);
+    store(fitted, pil, c0.zfit);
+    c0.zfit = {};
+    for (size_t f = 0; f < S.fos.size(); ++f) {
+        if (!feature_regression(out1[f], fitted, S.albedo, pilot, S.guides,
+                                S.fos[f], sel, S.nthreads))
+            return S.fail(out1[f]);
+        std::vector<float> c1 = read_channels(out1[f], sel, 0, 4);
+        for_ranges(sel.npixels(), S.nthreads, [&](size_t b, size_t e) {
+            for (size_t k = b; k < e; ++k)
+                for (int c = 0; c < 3; ++c) {
+                    float& v      = c1[4 * k + size_t(c)];
+                    const float a = bound_ia[3 * k + size_t(c)];
+                    if (a > 0.0f && bound_lo[3 * k + size_t(c)] <= bound_hi[3 * k + size_t(c)]) {
+                        // Saturated at the largest float, as the splats bound
+                        // theirs (splat_kernel.cpp).
+                        constexpr float largest = std::numeric_limits<float>::max();
+                        const float lo = std::clamp(bound_lo[3 * k + size_t(c)] * a, -largest, largest);
+                        const float hi = std::clamp(bound_hi[3 * k + size_t(c)] * a, -largest, largest);
+                        v = std::min(std::max(std::isnan(v) ? 0.0f : v, lo), hi);
+                    }
+                    v = saturated_float(double(v) + c0.spread[3 * k + size_t(c)]);
+                }
+        });
+        store(out1[f], sel, c1);
+    }
+    return true;
+}
+
+/// What the risks read over sel (FILTER.md 13.3): candidate 0 with its hat
+/// diagonal, the noise variance (0 at outliers and non fit points: no
+/// observation), the relative-MSE weight (NaN without an observation, for
+/// the halves' risk, which reads no variance).
+struct RiskInputs {
+    ImageBuf cand0, var, weight;
+};
+
+RiskInputs
+risk_inputs(const Selection& S, const Candidate0& c0)
+{
+    const ROI &sel = S.sel, &pil = S.pil, &k0reg = S.k0reg;
+    const ROI& frame = S.options.frame;
+    const size_t ns  = sel.npixels();
+    RiskInputs r { float_image(sel, frame, 4), float_image(sel, frame, 1),
+                   float_image(sel, frame, 1) };
+    const std::vector<float> z = read_channels(S.quotient, sel, 0, 3);
+    const std::vector<float> a = read_channels(S.albedo, sel, 0, 3);
+    std::vector<float> c0v(4 * ns), v(ns), w(ns);
+    for_rows(sel, S.nthreads, [&](int y) {
+        for (int x = sel.xbegin; x < sel.xend; ++x) {
+            const size_t k = size_t(y - sel.ybegin) * size_t(sel.width())
+                             + size_t(x - sel.xbegin);
+            const size_t i = size_t(y - pil.ybegin) * size_t(pil.width())
+                             + size_t(x - pil.xbegin);
+            for (int c = 0; c < 3; ++c)
+                c0v[4 * k + c] = c0.o0[3 * i + c];
+            c0v[4 * k + 3] = c0.d0_k0[size_t(y - k0reg.ybegin) * size_t(k0reg.width())
+                                      + size_t(x - k0reg.xbegin)];
+            const float o_l = luminance(&c0.o0[3 * i]);
+            const bool outlier = std::fabs(luminance(&z[3 * k]) - o_l)
+                                 > kOutlierSigmas * c0.s[i];
+            v[k] = outlier ? 0.0f : S.halves ? c0.s[i] * c0.s[i] : c0.sigma2[i];
+            // relMSE (x - ref)^2 / (ref^2 + 0.01) in radiance, written
+            // in z: radiance = z (a + albedo_eps).
+            const double al = std::max(luminance(&a[3 * k]), 0.0f)
+                              + S.options.albedo_eps;
+            w[k] = S.halves && !(v[k] > 0.0f)
+                       ? NAN
+                       : float(al * al / (o_l * o_l * al * al + 0.01));
+        }
+    });
+    store(r.cand0, sel, c0v);
+    store(r.var, sel, v);
+    store(r.weight, sel, w);
+    return r;
+}
+
+/// Each candidate's risk over sel: halves_risk() of its runs on the halves,
+/// else sure_risk().
+bool
+candidate_risks(const Selection& S, const RiskInputs& in, const HalvesRun& h,
+                const std::vector<ImageBuf>& out1, ImageBuf& risk0,
+                std::vector<ImageBuf>& risk1)
+{
+    const ROI& sel = S.sel;
+    if (S.halves) {
+        if (!halves_risk(risk0, h.out0[0], h.out0[1], h.z[0], h.z[1], in.weight,
+                         sel, S.nthreads))
+            return S.fail(risk0);
+        for (size_t f = 0; f < out1.size(); ++f)
+            if (!halves_risk(risk1[f], h.out1[0][f], h.out1[1][f], h.z[0], h.z[1],
+                             in.weight, sel, S.nthreads))
+                return S.fail(risk1[f]);
+    } else {
+        if (!sure_risk(risk0, in.cand0, S.quotient, in.var, in.weight, sel,
+                       S.nthreads))
+            return S.fail(risk0);
+        for (size_t f = 0; f < out1.size(); ++f)
+            if (!sure_risk(risk1[f], out1[f], S.quotient, in.var, in.weight, sel,
+                           S.nthreads))
+                return S.fail(risk1[f]);
+    }
+    return true;
+}
+
+/// The output over roi: candidate 0 (every channel), with the chosen RGB at
+/// the fit points (elsewhere both candidates pass the pixel through), and
+/// candidate 0's maps.
+bool
+write_selected(const Selection& S, const Candidate0& c0, const ImageBuf& chosen)
+{
+    const ROI &roi = S.roi, &pil = S.pil;
+    const int nch  = S.quotient.nchannels();
+    std::vector<float> out = read_channels(c0.out0, roi, 0, nch);
+    const std::vector<float> rgb = read_channels(chosen, roi, 0, 3);
+    for_rows(roi, S.nthreads, [&](int y) {
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const size_t k = size_t(y - roi.ybegin) * size_t(roi.width())
+                             + size_t(x - roi.xbegin);
+            const size_t i = size_t(y - pil.ybegin) * size_t(pil.width())
+                             + size_t(x - pil.xbegin);
+            if (c0.s[i] > 0.0f)
+                for (int c = 0; c < 3; ++c)
+                    out[size_t(nch) * k + size_t(c)] = rgb[3 * k + size_t(c)];
+        }
+    });
+    if (!S.dst.set_pixels(roi, TypeFloat, out.data())) {
+        S.dst.errorfmt("regression_filter: could not store the result");
+        return false;
+    }
+    if (S.options.diagnostics) {
+        if (!prepare_diagnostics(S.dst, *S.options.diagnostics, roi,
+                                 S.options.frame, "regression_filter"))
+            return false;
+        ROI r4     = roi;
+        r4.chbegin = 0;
+        r4.chend   = 4;
+        const std::vector<float> m = read_channels(c0.maps, r4, 0, 4);
+        S.options.diagnostics->set_pixels(r4, TypeFloat, m.data());
+    }
+    if (S.options.progress)
+        S.options.progress(1.0f);
     return true;
 }
 
@@ -358,281 +647,31 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                            const FilterOptions& options, ROI roi, int nthreads,
                            FilterStats& totals)
 {
-    const ROI& frame = options.frame;
-    FilterOptions base = options;
-    base.select      = 0;
-    std::vector<FeatureRegressionOptions> fos = feature_candidates();
-    for (FeatureRegressionOptions& f : fos) {
-        f.frame      = frame;
-        f.albedo_eps = options.albedo_eps;
-    }
-    const size_t nf     = fos.size();
-    const int fo_halo   = feature_candidates_halo();
-    const bool halves   = guides.half_a && guides.half_b;
-    SelectionOptions so;
-    so.frame = frame;
-    if (halves)
-        so.confidence = kHalvesConfidence;
-    const int nch = quotient.nchannels();
-    ROI sel = halo_region(roi, frame, selection_halo(so));
-    ROI pil = halo_region(sel, frame, fo_halo);
-    ROI k0reg = halo_region(pil, frame, kVarianceRadius);
-    ROI qreg = halo_region(k0reg, frame, filter_halo(base));
-    sel.chbegin = pil.chbegin = k0reg.chbegin = qreg.chbegin = roi.chbegin = 0;
-    sel.chend = pil.chend = k0reg.chend = qreg.chend = roi.chend = nch;
-    auto fail = [&](const ImageBuf& from) {
-        dst.errorfmt("{}", from.geterror());
+    Selection S(dst, quotient, albedo, guides, options, roi, nthreads);
+    Candidate0 c0;
+    if (!run_candidate0(S, totals, c0))
         return false;
-    };
-    auto progress = [&](float lo, float hi) -> std::function<void(float)> {
-        if (!options.progress)
-            return nullptr;
-        return [&, lo, hi](float f) { options.progress(lo + (hi - lo) * f); };
-    };
-
-    const size_t np = pil.npixels();
-    ImageBuf out0, maps, hat0;
-    std::vector<float> o0, o0_l, d0_k0;
-    // Candidate 0's noise estimate (section 3) over pil: the standard
-    // deviation of z_l at fit points, else 0 (no observation).
-    std::vector<float> s(np, 0.0f);
-    // What the feature regressions fit: the quotient of the fit points with
-    // the outliers capped (section 3a), NaN elsewhere, as candidate 0 fits
-    // it; the outliers' spread light is added to them as to candidate 0.
-    std::vector<float> zfit(3 * np, NAN);
-    std::vector<double> spread(3 * sel.npixels(), 0.0);
-    std::vector<float> bound_lo, bound_hi, bound_ia, sigma2;
-    {
-        // One decode of the inputs for candidate 0 and the selection's own
-        // stages: over candidate 0's region and its filter's halo, which
-        // holds the receivers of every outlier within r_max of the
-        // selection's pixels and the noise estimate's footprint.
-        FilterInputs in;
-        if (!decode_filter_inputs(in, dst, quotient, albedo, guides, base, qreg,
-                                  nthreads))
-            return false;
-        // Candidate 0 over the pilot's support and its noise's box (with
-        // its maps if asked for, and its hat diagonal for SURE).
-        ROI r0 = k0reg;
-        if (!prepare_dst(out0, quotient, r0, "regression_filter")
-            || (options.diagnostics
-                && !prepare_diagnostics(out0, maps, k0reg, frame,
-                                        "regression_filter"))
-            || (!halves
-                && !prepare_result(out0, hat0, k0reg, frame, 1,
-                                   "regression_filter", "hat diagonal")))
-            return fail(out0);
-        base.diagnostics = options.diagnostics ? &maps : nullptr;
-        base.progress    = progress(0.0f, halves ? 0.3f : 0.6f);
-        std::vector<double> k0spread;
-        // Its statistics are the output pixels' (roi), as without select.
-        if (!filter_decoded(out0, quotient, in, base, k0reg, roi, nthreads,
-                            totals, halves ? nullptr : &hat0, &k0spread))
-            return fail(out0);
-        base.diagnostics = nullptr;
-        o0 = read_channels(out0, pil, 0, 3);
-        // Candidate 0's light and D over k0reg (D: 1 with halves, unused).
-        o0_l = read_channels(out0, k0reg, 0, 3);
-        {
-            std::vector<float> l(k0reg.npixels());
-            for_ranges(l.size(), nthreads, [&](size_t b, size_t e) {
-                for (size_t k = b; k < e; ++k)
-                    l[k] = luminance(&o0_l[3 * k]);
-            });
-            o0_l = std::move(l);
-        }
-        d0_k0 = halves ? std::vector<float>(k0reg.npixels(), 1.0f)
-                       : read_channels(hat0, k0reg, 0, 1);
-        for_rows(pil, nthreads, [&](int y) {
-            for (int x = pil.xbegin; x < pil.xend; ++x) {
-                const size_t i = in.index(x, y);
-                const size_t k = size_t(y - pil.ybegin) * size_t(pil.width())
-                                 + size_t(x - pil.xbegin);
-                if (in.cls[i] & kFitPoint) {
-                    s[k] = std::sqrt(std::max(in.vs[i], 0.0f));
-                    for (int c = 0; c < 3; ++c)
-                        zfit[3 * k + size_t(c)] = in.zfit[c][i];
-                }
-            }
-        });
-        // The outliers' spread light over sel: candidate 0's (each pixel's
-        // sum is the same over any region that holds it).
-        for_rows(sel, nthreads, [&](int y) {
-            const size_t k  = size_t(y - sel.ybegin) * size_t(sel.width());
-            const size_t k0 = size_t(y - k0reg.ybegin) * size_t(k0reg.width())
-                              + size_t(sel.xbegin - k0reg.xbegin);
-            std::copy_n(&k0spread[3 * k0], 3 * size_t(sel.width()), &spread[3 * k]);
-        });
-        radiance_bounds(in, sel, base.r_max, bound_lo, bound_hi, bound_ia, nthreads);
-        if (!halves)
-            sigma2 = residual_bounded_variance(in, pil, k0reg, o0_l, d0_k0, s,
-                                               nthreads);
-    }
-
-    // What the risks need: with halves, every candidate on each half alone
-    // (their cross errors rank them with no noise estimate and no D);
-    // without, candidate 0's hat diagonal and the bounded noise. Either
-    // gives the variance of candidate 0's luminance, the pilot's.
-    std::vector<float> pilot_var(np);
-    ImageBuf half_z[2], half_out0[2];
-    std::vector<ImageBuf> half_out1[2];
-    if (halves) {
-        std::vector<float> dif2;
-        if (!filter_halves(dst, albedo, guides, base, progress, fos, sel, pil, qreg,
-                           s, half_z, half_out0, half_out1, dif2, nthreads))
-            return false;
-        // E (F(A) - F(B))^2 = 2 Var F(half) ~ 4 Var F((A + B) / 2).
-        for (size_t i = 0; i < np; ++i)
-            pilot_var[i] = 0.25f * dif2[i];
-    } else {
-        // sum_j H_qj^2 sigma_j^2 ~ D sigma^2.
-        for_rows(pil, nthreads, [&](int y) {
-            for (int x = pil.xbegin; x < pil.xend; ++x) {
-                const size_t i = size_t(y - pil.ybegin) * size_t(pil.width())
-                                 + size_t(x - pil.xbegin);
-                const float d = d0_k0[size_t(y - k0reg.ybegin) * size_t(k0reg.width())
-                                      + size_t(x - k0reg.xbegin)];
-                pilot_var[i] = sigma2[i] * std::min(std::max(d, 0.0f), 1.0f);
-            }
-        });
-    }
-    ImageBuf pilot = float_image(pil, frame, 4);
-    {
-        std::vector<float> pv(4 * np);
-        for_ranges(np, nthreads, [&](size_t b, size_t e) {
-            for (size_t i = b; i < e; ++i) {
-                for (int c = 0; c < 3; ++c)
-                    pv[4 * i + c] = o0[3 * i + c];
-                pv[4 * i + 3] = pilot_var[i];
-            }
-        });
-        store(pilot, pil, pv);
-    }
-
-    // The feature regressions, bounded by the radiance around each pixel,
-    // and the outliers' light.
+    HalvesRun h;
+    ImageBuf pilot;
+    if (!make_pilot(S, c0, h, pilot))
+        return false;
+    const size_t nf = S.fos.size();
     std::vector<ImageBuf> out1(nf);
-    ImageBuf fitted = float_image(pil, frame, 3);
-    store(fitted, pil, zfit);
-    zfit = {};
-    for (size_t f = 0; f < nf; ++f) {
-        if (!feature_regression(out1[f], fitted, albedo, pilot, guides, fos[f], sel,
-                                nthreads))
-            return fail(out1[f]);
-        std::vector<float> c1 = read_channels(out1[f], sel, 0, 4);
-        for_ranges(sel.npixels(), nthreads, [&](size_t b, size_t e) {
-            for (size_t k = b; k < e; ++k)
-                for (int c = 0; c < 3; ++c) {
-                    float& v      = c1[4 * k + size_t(c)];
-                    const float a = bound_ia[3 * k + size_t(c)];
-                    if (a > 0.0f && bound_lo[3 * k + size_t(c)] <= bound_hi[3 * k + size_t(c)]) {
-                        // Saturated at the largest float, as the splats bound
-                        // theirs (splat_kernel.cpp).
-                        constexpr float largest = std::numeric_limits<float>::max();
-                        const float lo = std::clamp(bound_lo[3 * k + size_t(c)] * a, -largest, largest);
-                        const float hi = std::clamp(bound_hi[3 * k + size_t(c)] * a, -largest, largest);
-                        v = std::min(std::max(std::isnan(v) ? 0.0f : v, lo), hi);
-                    }
-                    v = saturated_float(double(v) + spread[3 * k + size_t(c)]);
-                }
-        });
-        store(out1[f], sel, c1);
-    }
-
-    // Risks over the selection's support: variance (0 at outliers and non
-    // fit points: no observation), relative-MSE weight (NaN without an
-    // observation, for the halves' risk, which reads no variance).
-    const size_t ns = sel.npixels();
-    ImageBuf cand0 = float_image(sel, frame, 4), var = float_image(sel, frame, 1),
-             weight = float_image(sel, frame, 1);
-    {
-        const std::vector<float> z = read_channels(quotient, sel, 0, 3);
-        const std::vector<float> a = read_channels(albedo, sel, 0, 3);
-        std::vector<float> c0(4 * ns), v(ns), w(ns);
-        for_rows(sel, nthreads, [&](int y) {
-            for (int x = sel.xbegin; x < sel.xend; ++x) {
-                const size_t k = size_t(y - sel.ybegin) * size_t(sel.width())
-                                 + size_t(x - sel.xbegin);
-                const size_t i = size_t(y - pil.ybegin) * size_t(pil.width())
-                                 + size_t(x - pil.xbegin);
-                for (int c = 0; c < 3; ++c)
-                    c0[4 * k + c] = o0[3 * i + c];
-                c0[4 * k + 3] = d0_k0[size_t(y - k0reg.ybegin) * size_t(k0reg.width())
-                                      + size_t(x - k0reg.xbegin)];
-                const float o_l = luminance(&o0[3 * i]);
-                const bool outlier = std::fabs(luminance(&z[3 * k]) - o_l)
-                                     > kOutlierSigmas * s[i];
-                v[k] = outlier ? 0.0f : halves ? s[i] * s[i] : sigma2[i];
-                // relMSE (x - ref)^2 / (ref^2 + 0.01) in radiance, written
-                // in z: radiance = z (a + albedo_eps).
-                const double al = std::max(luminance(&a[3 * k]), 0.0f)
-                                  + options.albedo_eps;
-                w[k] = halves && !(v[k] > 0.0f)
-                           ? NAN
-                           : float(al * al / (o_l * o_l * al * al + 0.01));
-            }
-        });
-        store(cand0, sel, c0);
-        store(var, sel, v);
-        store(weight, sel, w);
-    }
+    if (!filter_features(S, c0, pilot, out1))
+        return false;
+    const RiskInputs ri = risk_inputs(S, c0);
     ImageBuf risk0, chosen;
     std::vector<ImageBuf> risk1(nf);
-    if (halves) {
-        if (!halves_risk(risk0, half_out0[0], half_out0[1], half_z[0], half_z[1],
-                         weight, sel, nthreads))
-            return fail(risk0);
-        for (size_t f = 0; f < nf; ++f)
-            if (!halves_risk(risk1[f], half_out1[0][f], half_out1[1][f], half_z[0],
-                             half_z[1], weight, sel, nthreads))
-                return fail(risk1[f]);
-    } else {
-        if (!sure_risk(risk0, cand0, quotient, var, weight, sel, nthreads))
-            return fail(risk0);
-        for (size_t f = 0; f < nf; ++f)
-            if (!sure_risk(risk1[f], out1[f], quotient, var, weight, sel, nthreads))
-                return fail(risk1[f]);
-    }
-    std::vector<const ImageBuf*> candidates = { &cand0 }, risks = { &risk0 };
+    if (!candidate_risks(S, ri, h, out1, risk0, risk1))
+        return false;
+    std::vector<const ImageBuf*> candidates = { &ri.cand0 }, risks = { &risk0 };
     for (size_t f = 0; f < nf; ++f) {
         candidates.push_back(&out1[f]);
         risks.push_back(&risk1[f]);
     }
-    if (!select_by_risk(chosen, candidates, risks, so, nullptr, roi, nthreads))
-        return fail(chosen);
-
-    // The output: candidate 0 (every channel), with the chosen RGB at the
-    // fit points (elsewhere both candidates pass the pixel through).
-    std::vector<float> out = read_channels(out0, roi, 0, nch);
-    const std::vector<float> rgb = read_channels(chosen, roi, 0, 3);
-    for_rows(roi, nthreads, [&](int y) {
-        for (int x = roi.xbegin; x < roi.xend; ++x) {
-            const size_t k = size_t(y - roi.ybegin) * size_t(roi.width())
-                             + size_t(x - roi.xbegin);
-            const size_t i = size_t(y - pil.ybegin) * size_t(pil.width())
-                             + size_t(x - pil.xbegin);
-            if (s[i] > 0.0f)
-                for (int c = 0; c < 3; ++c)
-                    out[size_t(nch) * k + size_t(c)] = rgb[3 * k + size_t(c)];
-        }
-    });
-    if (!dst.set_pixels(roi, TypeFloat, out.data())) {
-        dst.errorfmt("regression_filter: could not store the result");
-        return false;
-    }
-    if (options.diagnostics) {
-        if (!prepare_diagnostics(dst, *options.diagnostics, roi, frame,
-                                 "regression_filter"))
-            return false;
-        ROI r4    = roi;
-        r4.chbegin = 0;
-        r4.chend   = 4;
-        const std::vector<float> m = read_channels(maps, r4, 0, 4);
-        options.diagnostics->set_pixels(r4, TypeFloat, m.data());
-    }
-    if (options.progress)
-        options.progress(1.0f);
-    return true;
+    if (!select_by_risk(chosen, candidates, risks, S.so, nullptr, S.roi, nthreads))
+        return S.fail(chosen);
+    return write_selected(S, c0, chosen);
 }
 
 }  // namespace detail
