@@ -1,5 +1,17 @@
 // Copyright zdenoise contributors.
 // SPDX-License-Identifier: BSD-3-Clause
+//
+// run_batch(): a job frame by frame over a sequence (docs/FARM.md,
+// docs/TEMPORAL.md "Frames at the ends"), or over one image. Stages:
+//   parse_batch_frames()  --frames or a file name's list; names that agree
+//   shot_bounds()         the shot the --temporal neighbours lie in
+//                         (--shot-range, else the frames')
+//   --print-chunks        job::frame_chunks() printed, and nothing run
+//   frames_to_denoise()   what the input pattern must name (the frames
+//                         whose output is missing, with --skip-existing)
+//   run_frames()          each frame's job, with its neighbours: skipped,
+//                         done or failed, and the progress line
+//   summary_line(), write_report()  the summary and --report's JSON
 
 #include "sequence.h"
 
@@ -204,6 +216,198 @@ write_report(const std::string& path, const job::Job& job,
     return job::write_text_atomically(path, text, error);
 }
 
+/// The frames of a batch: a sequence's (a frame pattern in an input or the
+/// output) and the shot their --temporal neighbours lie in, or none (one
+/// image).
+struct BatchFrames {
+    bool patterned_in = false;
+    bool sequence     = false;
+    std::vector<int> frames;
+    int first = 0, last = 0;  ///< the shot
+};
+
+/// The frames: --frames, else a list in a file name ("s.1-10#.exr"), and
+/// names that agree with them. False, with `error`, on a usage error.
+bool
+parse_batch_frames(const job::Job& job, const std::string& output,
+                   const SequenceOptions& o, BatchFrames& b, std::string& error)
+{
+    std::string frames_in_name;
+    b.patterned_in           = job::job_has_frame_pattern(job, &frames_in_name);
+    const bool patterned_out = job::has_frame_pattern(output, &frames_in_name);
+    const std::string list   = o.frames.empty() ? frames_in_name : o.frames;
+    b.sequence = b.patterned_in || patterned_out;
+    if (b.sequence) {
+        if (list.empty()) {
+            error = "a frame pattern (#, @ or %0Nd) needs --frames, e.g. "
+                    "--frames 1001-1100";
+            return false;
+        }
+        if (!job::parse_frame_list(list, b.frames)) {
+            error = format("--frames: '{}' is not a frame list (e.g. "
+                           "1001-1100, 1-99x2, 1,5,9)",
+                           list);
+            return false;
+        }
+        if (b.patterned_in && !patterned_out && !output.empty()) {
+            error = format("-o '{}' has no frame pattern: every frame would "
+                           "write it; use e.g. clean.#.exr",
+                           output);
+            return false;
+        }
+        if (!job.diagnostics_png.empty()
+            && !job::has_frame_pattern(job.diagnostics_png)) {
+            error = format("--diagnostics-png '{}' has no frame pattern: "
+                           "every frame would write it; use e.g. error.#.png",
+                           job.diagnostics_png);
+            return false;
+        }
+    } else if (!o.frames.empty() || o.print_chunks > 0
+               || !job.shot_range.empty()) {
+        error = format("{} needs a frame pattern (#, @ or %0Nd) in the "
+                       "input and output names, e.g. --in shot.#.exr -o "
+                       "clean.#.exr",
+                       !o.frames.empty()    ? "--frames"
+                       : o.print_chunks > 0 ? "--print-chunks"
+                                            : "--shot-range");
+        return false;
+    }
+    return true;
+}
+
+/// The shot the neighbours of --temporal lie in: --shot-range, which must
+/// hold the frames (a farm chunk's --frames is part of it), else the
+/// frames' own first and last. False, with `error`, on a usage error.
+bool
+shot_bounds(const job::Job& job, BatchFrames& b, std::string& error)
+{
+    if (b.sequence) {
+        b.first = *std::min_element(b.frames.begin(), b.frames.end());
+        b.last  = *std::max_element(b.frames.begin(), b.frames.end());
+    }
+    if (b.sequence && !job.shot_range.empty()) {
+        if (!job::frame_bounds(job.shot_range, b.first, b.last)) {
+            error = format("--shot-range: '{}' is not a frame list (e.g. "
+                           "1001-1100)",
+                           job.shot_range);
+            return false;
+        }
+        for (int f : b.frames)
+            if (f < b.first || f > b.last) {
+                error = format("--shot-range {} does not hold frame {} of "
+                               "--frames",
+                               job.shot_range, f);
+                return false;
+            }
+    }
+    return true;
+}
+
+/// The frames to denoise: all, or with --skip-existing those whose output
+/// is missing.
+std::vector<int>
+frames_to_denoise(const BatchFrames& b, const std::string& output,
+                  const SequenceOptions& o)
+{
+    std::vector<int> wanted;
+    for (int f : b.frames)
+        if (!o.skip_existing || !Filesystem::exists(job::frame_path(output, f)))
+            wanted.push_back(f);
+    return wanted;
+}
+
+/// One record a frame, its output named; one for the image outside a
+/// sequence.
+std::vector<FrameRecord>
+frame_records(const BatchFrames& b, const std::string& output)
+{
+    std::vector<FrameRecord> records;
+    if (b.sequence) {
+        for (int f : b.frames) {
+            FrameRecord r;
+            r.frame  = f;
+            r.output = job::frame_path(output, f);
+            records.push_back(r);
+        }
+    } else {
+        FrameRecord r;
+        r.has_number = false;
+        r.output     = output;
+        records.push_back(r);
+    }
+    return records;
+}
+
+/// What the frames came to, counted as they ran.
+struct BatchTally {
+    size_t done = 0, skipped = 0, failed = 0;
+    std::string failed_frames;  ///< their numbers (or the image's name)
+};
+
+/// Run the records' frames in order (each with its neighbours in the shot):
+/// an existing output skipped with --skip-existing, a failed frame
+/// reported and the rest run, unless --fail-fast.
+BatchTally
+run_frames(const job::Job& job, const BatchFrames& b, const SequenceOptions& o,
+           std::vector<FrameRecord>& records, Progress& progress)
+{
+    BatchTally t;
+    double work_seconds = 0.0;  // of frames denoised, for the ETA
+    for (FrameRecord& r : records) {
+        const size_t finished = t.done + t.failed;
+        const size_t left     = records.size() - t.done - t.failed - t.skipped;
+        if (o.skip_existing && Filesystem::exists(r.output)) {
+            r.status = FrameRecord::Status::Skipped;
+            ++t.skipped;
+            if (o.verbose)
+                progress.line(format("zdenoise: frame {}: '{}' exists, "
+                                     "skipped",
+                                     r.frame, r.output));
+            continue;
+        }
+        progress.starting(r, t.done + t.failed + t.skipped,
+                          finished ? work_seconds / double(finished)
+                                         * double(left)
+                                   : 0.0);
+        run_frame(b.sequence ? job::job_with_neighbours(job, r.frame, b.first,
+                                                        b.last)
+                             : job,
+                  r, o);
+        work_seconds += r.seconds;
+        if (r.status == FrameRecord::Status::Failed) {
+            ++t.failed;
+            t.failed_frames += (t.failed_frames.empty() ? "" : ",")
+                               + (r.has_number ? std::to_string(r.frame)
+                                               : r.output);
+            if (r.has_number)  // a single image's error is the last line
+                progress.line(format("zdenoise: error: frame {}: {}", r.frame,
+                                     r.error));
+            if (o.fail_fast)
+                break;
+        } else {
+            ++t.done;
+        }
+    }
+    return t;
+}
+
+/// The summary line: the frames denoised, skipped, failed (and not
+/// started, after --fail-fast), and the time.
+std::string
+summary_line(size_t nrecords, const BatchTally& t, const SequenceOptions& o,
+             double seconds)
+{
+    return format("zdenoise: {} frame{}: {} denoised, {} skipped, {} "
+                  "failed{} in {}",
+                  nrecords, nrecords == 1 ? "" : "s", t.done, t.skipped,
+                  t.failed,
+                  (o.fail_fast && t.failed)
+                      ? format(", {} not started",
+                               nrecords - t.done - t.skipped - t.failed)
+                      : std::string(),
+                  seconds_text(seconds));
+}
+
 }  // namespace
 
 
@@ -221,162 +425,37 @@ int
 run_batch(const job::Job& job, const std::string& output,
           const SequenceOptions& o, std::string& error)
 {
-    // The frames: --frames, else a list in a file name ("s.1-10#.exr").
-    std::string frames_in_name;
-    const bool patterned_in  = job::job_has_frame_pattern(job, &frames_in_name);
-    const bool patterned_out = job::has_frame_pattern(output, &frames_in_name);
-    const std::string list   = o.frames.empty() ? frames_in_name : o.frames;
-    std::vector<int> frames;
-    const bool sequence = patterned_in || patterned_out;
-    if (sequence) {
-        if (list.empty()) {
-            error = "a frame pattern (#, @ or %0Nd) needs --frames, e.g. "
-                    "--frames 1001-1100";
-            return kExitUsage;
-        }
-        if (!job::parse_frame_list(list, frames)) {
-            error = format("--frames: '{}' is not a frame list (e.g. "
-                           "1001-1100, 1-99x2, 1,5,9)",
-                           list);
-            return kExitUsage;
-        }
-        if (patterned_in && !patterned_out && !output.empty()) {
-            error = format("-o '{}' has no frame pattern: every frame would "
-                           "write it; use e.g. clean.#.exr",
-                           output);
-            return kExitUsage;
-        }
-        if (!job.diagnostics_png.empty()
-            && !job::has_frame_pattern(job.diagnostics_png)) {
-            error = format("--diagnostics-png '{}' has no frame pattern: "
-                           "every frame would write it; use e.g. error.#.png",
-                           job.diagnostics_png);
-            return kExitUsage;
-        }
-    } else if (!o.frames.empty() || o.print_chunks > 0
-               || !job.shot_range.empty()) {
-        error = format("{} needs a frame pattern (#, @ or %0Nd) in the "
-                       "input and output names, e.g. --in shot.#.exr -o "
-                       "clean.#.exr",
-                       !o.frames.empty()    ? "--frames"
-                       : o.print_chunks > 0 ? "--print-chunks"
-                                            : "--shot-range");
+    BatchFrames b;
+    if (!parse_batch_frames(job, output, o, b, error)
+        || !shot_bounds(job, b, error))
         return kExitUsage;
-    }
-    // The shot the neighbours of --temporal lie in: a farm chunk's
-    // --frames is part of it.
-    int first = 0, last = 0;
-    if (sequence) {
-        first = *std::min_element(frames.begin(), frames.end());
-        last  = *std::max_element(frames.begin(), frames.end());
-    }
-    if (sequence && !job.shot_range.empty()) {
-        if (!job::frame_bounds(job.shot_range, first, last)) {
-            error = format("--shot-range: '{}' is not a frame list (e.g. "
-                           "1001-1100)",
-                           job.shot_range);
-            return kExitUsage;
-        }
-        for (int f : frames)
-            if (f < first || f > last) {
-                error = format("--shot-range {} does not hold frame {} of "
-                               "--frames",
-                               job.shot_range, f);
-                return kExitUsage;
-            }
-    }
     if (o.print_chunks > 0) {
-        for (const std::string& chunk : job::frame_chunks(frames,
+        for (const std::string& chunk : job::frame_chunks(b.frames,
                                                           o.print_chunks))
             printf("%s\n", chunk.c_str());
         return 0;
     }
-
-    // A pattern that names no file of the frames to denoise (those whose
-    // output is missing, with --skip-existing) fails up front, not frame
-    // by frame.
-    if (patterned_in) {
-        std::vector<int> wanted;
-        for (int f : frames)
-            if (!o.skip_existing
-                || !Filesystem::exists(job::frame_path(output, f)))
-                wanted.push_back(f);
-        error = job::unmatched_frame_pattern(job, wanted);
+    // A pattern that names no file of the frames to denoise fails up front,
+    // not frame by frame.
+    if (b.patterned_in) {
+        error = job::unmatched_frame_pattern(job,
+                                             frames_to_denoise(b, output, o));
         if (!error.empty())
             return kExitError;
     }
-
-    std::vector<FrameRecord> records;
-    if (sequence) {
-        for (int f : frames) {
-            FrameRecord r;
-            r.frame  = f;
-            r.output = job::frame_path(output, f);
-            records.push_back(r);
-        }
-    } else {
-        FrameRecord r;
-        r.has_number = false;
-        r.output     = output;
-        records.push_back(r);
-    }
-
+    std::vector<FrameRecord> records = frame_records(b, output);
     Timer total;
     Progress progress(records.size());
-    size_t done = 0, skipped = 0, failed = 0;
-    double work_seconds = 0.0;  // of frames denoised, for the ETA
-    std::string failed_frames;
-    for (FrameRecord& r : records) {
-        const size_t finished = done + failed;
-        const size_t left     = records.size() - done - failed - skipped;
-        if (o.skip_existing && Filesystem::exists(r.output)) {
-            r.status = FrameRecord::Status::Skipped;
-            ++skipped;
-            if (o.verbose)
-                progress.line(format("zdenoise: frame {}: '{}' exists, "
-                                     "skipped",
-                                     r.frame, r.output));
-            continue;
-        }
-        progress.starting(r, done + failed + skipped,
-                          finished ? work_seconds / double(finished)
-                                         * double(left)
-                                   : 0.0);
-        run_frame(sequence ? job::job_with_neighbours(job, r.frame, first, last)
-                           : job,
-                  r, o);
-        work_seconds += r.seconds;
-        if (r.status == FrameRecord::Status::Failed) {
-            ++failed;
-            failed_frames += (failed_frames.empty() ? "" : ",")
-                             + (r.has_number ? std::to_string(r.frame)
-                                             : r.output);
-            if (r.has_number)  // a single image's error is the last line
-                progress.line(format("zdenoise: error: frame {}: {}", r.frame,
-                                     r.error));
-            if (o.fail_fast)
-                break;
-        } else {
-            ++done;
-        }
-    }
+    const BatchTally t   = run_frames(job, b, o, records, progress);
     const double seconds = total();
-    progress.line(format("zdenoise: {} frame{}: {} denoised, {} skipped, {} "
-                         "failed{} in {}",
-                         records.size(), records.size() == 1 ? "" : "s", done,
-                         skipped, failed,
-                         (o.fail_fast && failed)
-                             ? format(", {} not started",
-                                      records.size() - done - skipped - failed)
-                             : std::string(),
-                         seconds_text(seconds)));
+    progress.line(summary_line(records.size(), t, o, seconds));
     if (!o.report.empty() && !write_report(o.report, job, records, seconds,
                                            error))
         return kExitError;
-    if (failed) {
-        error = sequence ? format("{} of {} frames failed: {}", failed,
-                                  records.size(), failed_frames)
-                         : records.front().error;
+    if (t.failed) {
+        error = b.sequence ? format("{} of {} frames failed: {}", t.failed,
+                                    records.size(), t.failed_frames)
+                           : records.front().error;
         return kExitError;
     }
     return 0;
