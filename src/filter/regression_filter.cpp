@@ -28,6 +28,7 @@
 #include "hole_fill.h"
 #include "internal.h"
 #include "outliers.h"
+#include "regression_filter.h"
 #include "selected_filter.h"
 #include "window_fitter.h"
 

@@ -39,6 +39,7 @@
 #include "filter_inputs.h"
 #include "internal.h"
 #include "radiance_bounds.h"
+#include "regression_filter.h"
 
 namespace zdenoise {
 namespace detail {
