@@ -18,6 +18,7 @@
 #include <OpenImageIO/imagebufalgo_util.h>
 
 #include "albedo_prefilter_kernels.h"
+#include "checks.h"
 #include "internal.h"
 
 namespace zdenoise {

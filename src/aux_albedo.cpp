@@ -18,6 +18,7 @@
 
 #include <OpenImageIO/imagebufalgo_util.h>
 
+#include "checks.h"
 #include "internal.h"
 
 namespace zdenoise {

@@ -3,6 +3,7 @@
 //
 // Argument checking shared by the operations.
 
+#include "checks.h"
 #include "internal.h"
 
 #include <zdenoise/zdenoise.h>

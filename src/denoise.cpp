@@ -5,6 +5,7 @@
 
 #include <zdenoise/zdenoise.h>
 
+#include "checks.h"
 #include "internal.h"
 
 namespace zdenoise {

@@ -12,6 +12,8 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
+#include "checks.h"
+#include "modulate.h"
 #include "internal.h"
 
 namespace zdenoise {

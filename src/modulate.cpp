@@ -10,6 +10,8 @@
 #include <OpenImageIO/half.h>
 #include <OpenImageIO/imagebufalgo_util.h>
 
+#include "checks.h"
+#include "modulate.h"
 #include "internal.h"
 
 namespace zdenoise {

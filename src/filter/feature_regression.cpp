@@ -25,6 +25,7 @@
 
 #include "feature_regression_kernels.h"
 #include "filter_inputs.h"
+#include "checks.h"
 #include "internal.h"
 
 namespace zdenoise {

@@ -20,6 +20,7 @@
 #include <OpenImageIO/imagebufalgo_util.h>
 
 #include "filter_inputs.h"
+#include "checks.h"
 #include "internal.h"
 
 namespace zdenoise {

@@ -26,6 +26,7 @@
 #include "centre_blocks.h"
 #include "filter_inputs.h"
 #include "hole_fill.h"
+#include "checks.h"
 #include "internal.h"
 #include "outliers.h"
 #include "regression_filter.h"

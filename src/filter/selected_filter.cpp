@@ -37,6 +37,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 
 #include "filter_inputs.h"
+#include "checks.h"
 #include "internal.h"
 #include "radiance_bounds.h"
 #include "regression_filter.h"

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "filter/filter_inputs.h"
+#include "checks.h"
 #include "internal.h"
 
 namespace zdenoise {
