@@ -6,6 +6,7 @@
 // denoised, --fail-fast, --skip-existing, progress lines, the JSON report,
 // and the chunks a farm dispatches.
 
+#include <cstdio>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -43,6 +44,22 @@ protected:
         return "--in " + path("noisy.#.exr") + " --albedo " + path("albedo.#.exr") + " -o "
                + path("out.#.exr");
     }
+    /// single.<frame>.exr: the frame denoised by a run of its own (made
+    /// once), which the sequence must write bit for bit.
+    std::string single(int frame) const
+    {
+        char number[32];
+        std::snprintf(number, sizeof number, "%04d", frame);
+        const std::string out = path(std::string("single.") + number + ".exr");
+        if (!Filesystem::exists(out)) {
+            const RunResult r = zdenoise("--in " + path(std::string("noisy.") + number + ".exr")
+                                         + " --albedo "
+                                         + path(std::string("albedo.") + number + ".exr")
+                                         + " -o " + out);
+            EXPECT_EQ(r.status, 0) << r.err;
+        }
+        return out;
+    }
 };
 
 /// The progress line when frame `frame` starts, `done` frames before it.
@@ -52,12 +69,13 @@ format_progress(int done, int frame)
     return "zdenoise: [" + std::to_string(done) + "/6 done] frame " + std::to_string(frame);
 }
 
+/// Whether two files have the same pixels, or within `tolerance` of them.
 bool
-same_pixels(const std::string& a, const std::string& b)
+same_pixels(const std::string& a, const std::string& b, float tolerance = 0.0f)
 {
     ImageBuf x(a), y(b);
-    auto d = ImageBufAlgo::compare(x, y, 0.0f, 0.0f);
-    return !x.has_error() && !y.has_error() && d.nfail == 0 && d.maxerror == 0.0;
+    auto d = ImageBufAlgo::compare(x, y, tolerance, tolerance);
+    return !x.has_error() && !y.has_error() && d.nfail == 0 && d.maxerror <= tolerance;
 }
 
 }  // namespace
@@ -71,8 +89,9 @@ TEST_F(Sequence, MissingAndCorruptFramesAreReportedAndTheOthersDenoised)
     RunResult r = zdenoise(sequence_args() + " --frames 1001-1006 --report "
                            + path("report.json"));
     EXPECT_EQ(r.status, 1) << r.err;
+    // Each frame of the sequence is the image a single run writes.
     for (int f : { 1001, 1002, 1004, 1006 })
-        EXPECT_TRUE(Filesystem::exists(path("out." + std::to_string(f) + ".exr"))) << f;
+        EXPECT_TRUE(same_pixels(path("out." + std::to_string(f) + ".exr"), single(f))) << f;
     EXPECT_FALSE(Filesystem::exists(path("out.1003.exr")));
     EXPECT_FALSE(Filesystem::exists(path("out.1005.exr")));
     EXPECT_NE(r.err.find("zdenoise: error: frame 1003: cannot read '" + path("noisy.1003.exr")),
@@ -85,12 +104,6 @@ TEST_F(Sequence, MissingAndCorruptFramesAreReportedAndTheOthersDenoised)
     // Not on a terminal: one progress line per frame started.
     for (int k = 0; k < 6; ++k)
         EXPECT_NE(r.err.find(format_progress(k, 1001 + k)), std::string::npos) << r.err;
-
-    // A frame of the sequence is the image a single run writes.
-    r = zdenoise("--in " + path("noisy.1004.exr") + " --albedo " + path("albedo.1004.exr")
-                 + " -o " + path("single.exr"));
-    ASSERT_EQ(r.status, 0) << r.err;
-    EXPECT_TRUE(same_pixels(path("single.exr"), path("out.1004.exr")));
 
     // The report: one entry per frame, timings, parameters, statistics.
     nlohmann::json report = nlohmann::json::parse(slurp(path("report.json")));
@@ -121,7 +134,8 @@ TEST_F(Sequence, FailFastStopsAtTheFirstFailedFrame)
     write_frames({ 1001, 1002, 1004 });
     RunResult r = zdenoise(sequence_args() + " --frames 1001-1004 --fail-fast");
     EXPECT_EQ(r.status, 1);
-    EXPECT_TRUE(Filesystem::exists(path("out.1002.exr")));
+    for (int f : { 1001, 1002 })
+        EXPECT_TRUE(same_pixels(path("out." + std::to_string(f) + ".exr"), single(f))) << f;
     EXPECT_FALSE(Filesystem::exists(path("out.1004.exr"))) << "nothing after the failure";
     EXPECT_NE(r.err.find("1 not started"), std::string::npos) << r.err;
 }
@@ -142,7 +156,8 @@ TEST_F(Sequence, SkipExistingLeavesFinishedFramesAlone)
     EXPECT_NE(r.err.find("3 frames: 1 denoised, 2 skipped, 0 failed"), std::string::npos)
         << r.err;
     EXPECT_EQ(ImageBuf(path("out.0002.exr")).spec().width, 4);
-    EXPECT_TRUE(Filesystem::exists(path("out.0003.exr")));
+    for (int f : { 1, 3 })
+        EXPECT_TRUE(same_pixels(path("out.000" + std::to_string(f) + ".exr"), single(f))) << f;
     nlohmann::json report = nlohmann::json::parse(slurp(path("r.json")));
     EXPECT_EQ(report["frames"][1]["status"], "skipped");
 }
@@ -156,22 +171,25 @@ TEST_F(Sequence, OiiotoolFramePatternsAndFrameLists)
                            + path("albedo.%04d.exr") + " -o " + path("a.@@@@.exr")
                            + " --frames 1-7x2");
     ASSERT_EQ(r.status, 0) << r.err;
-    for (const char* f : { "a.0001.exr", "a.0003.exr", "a.0005.exr", "a.0007.exr" })
-        EXPECT_TRUE(Filesystem::exists(path(f))) << f;
+    // Each output is its own frame's: the single run of that frame.
+    for (int f : { 1, 3, 5, 7 })
+        EXPECT_TRUE(same_pixels(path("a.000" + std::to_string(f) + ".exr"), single(f))) << f;
     // A comma list, and # (4 digits); @ is one digit.
     r = zdenoise(sequence_args() + " --frames 3,7");
     ASSERT_EQ(r.status, 0) << r.err;
-    EXPECT_TRUE(Filesystem::exists(path("out.0003.exr")));
-    EXPECT_TRUE(Filesystem::exists(path("out.0007.exr")));
+    EXPECT_TRUE(same_pixels(path("out.0003.exr"), single(3)));
+    EXPECT_TRUE(same_pixels(path("out.0007.exr"), single(7)));
     EXPECT_FALSE(Filesystem::exists(path("out.0005.exr")));
     r = zdenoise(sequence_args() + " -o " + path("b.@.exr") + " --frames 5");
     ASSERT_EQ(r.status, 0) << r.err;
-    EXPECT_TRUE(Filesystem::exists(path("b.5.exr")));
+    EXPECT_TRUE(same_pixels(path("b.5.exr"), single(5)));
     // The frame list may be in the name, as oiiotool allows.
     r = zdenoise("--in " + path("noisy.1-3x2#.exr") + " --albedo " + path("albedo.#.exr")
                  + " -o " + path("c.#.exr"));
     ASSERT_EQ(r.status, 0) << r.err;
-    EXPECT_TRUE(Filesystem::exists(path("c.0003.exr")));
+    EXPECT_TRUE(same_pixels(path("c.0001.exr"), single(1)));
+    EXPECT_TRUE(same_pixels(path("c.0003.exr"), single(3)));
+    EXPECT_FALSE(Filesystem::exists(path("c.0002.exr")));
 }
 
 
@@ -335,11 +353,29 @@ TEST_F(Sequence, TemporalUsesTheNeighboursAndNamesAMissingOne)
         << r.out;
     EXPECT_NE(r.out.find("temporal  frames +1 around this one"), std::string::npos)
         << "the first frame uses the neighbour it has\n" << r.out;
-    // The output is not the frame alone's.
-    RunResult alone = zdenoise("--in " + path("noisy.0002.exr") + " --albedo "
-                               + path("albedo.0002.exr") + " -o " + path("alone.exr"));
+    // A static scene (each frame the same staircase with its own 4-spp
+    // noise): frame 2 with its two neighbours has a third of the noise
+    // before the filter, and much less error after it than alone
+    // (measured: relMSE 0.0136 against 0.0324, 2.4x).
+    const synth::Scene truth = synth::staircase(64, 48, 8, { 4, 42 });
+    for (int f : { 1, 2, 3 }) {
+        const synth::Scene s = synth::staircase(64, 48, 8, { 4, uint32_t(40 + f) });
+        ASSERT_TRUE(s.noisy.write(path("static." + std::to_string(f) + ".exr")));
+        ASSERT_TRUE(s.albedo.write(path("static_albedo." + std::to_string(f) + ".exr")));
+    }
+    r = zdenoise("--in " + path("static.@.exr") + " --albedo " + path("static_albedo.@.exr")
+                 + " -o " + path("static_out.@.exr") + " --frames 1-3 --temporal 1 "
+                 + "--static-camera");
+    ASSERT_EQ(r.status, 0) << r.err;
+    RunResult alone = zdenoise("--in " + path("static.2.exr") + " --albedo "
+                               + path("static_albedo.2.exr") + " -o " + path("alone.exr"));
     ASSERT_EQ(alone.status, 0) << alone.err;
-    EXPECT_FALSE(same_pixels(path("out.0002.exr"), path("alone.exr")));
+    const double with_neighbours = synth::rel_mse(ImageBuf(path("static_out.2.exr")),
+                                                  truth.clean);
+    const double by_itself = synth::rel_mse(ImageBuf(path("alone.exr")), truth.clean);
+    std::printf("  static staircase, 4 spp: relMSE %.5f with frames 1 and 3, %.5f alone\n",
+                with_neighbours, by_itself);
+    EXPECT_LT(1.8 * with_neighbours, by_itself);
 
     r = zdenoise(sequence_args() + " --frames 3-5 --temporal 1 --static-camera");
     EXPECT_EQ(r.status, 1) << r.err;
@@ -409,6 +445,10 @@ TEST_F(Sequence, ShotRangeGivesAChunkTheFramesAroundIt)
     ASSERT_EQ(bounded.status, 0) << bounded.err;
     EXPECT_FALSE(same_pixels(path("bounded.0002.exr"), path("whole.0002.exr")))
         << "without --shot-range the chunk is the whole sequence";
+    // A chunk of one frame has no neighbours: it is the frame alone, to
+    // float rounding (the light goes through the temporal combination;
+    // measured: 6e-8 at most).
+    EXPECT_TRUE(same_pixels(path("bounded.0002.exr"), single(2), 1e-6f));
 
     RunResult r = zdenoise(args + " --frames 2-4 --shot-range 1-3 -o " + path("out.#.exr"));
     EXPECT_EQ(r.status, 2) << r.err;
