@@ -151,13 +151,5 @@ for_rows(const ROI& region, int nthreads, F&& row)
                        paropt_any_length(nthreads));
 }
 
-/// Decode the quotient, albedo and guides over `region` and estimate the
-/// noise (docs/FILTER.md sections 2-3). Guides must have been checked to
-/// cover the region. Returns false (message in dst) on bad guide shapes.
-bool
-decode_filter_inputs(FilterInputs& in, ImageBuf& dst, const ImageBuf& quotient,
-                     const ImageBuf& albedo, const Guides& guides,
-                     const FilterOptions& opt, ROI region, int nthreads);
-
 }  // namespace detail
 }  // namespace zdenoise

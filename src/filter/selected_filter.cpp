@@ -36,11 +36,12 @@
 
 #include <OpenImageIO/imagebufalgo.h>
 
+#include "decode_inputs.h"
 #include "filter_inputs.h"
 #include "checks.h"
 #include "internal.h"
 #include "radiance_bounds.h"
-#include "regression_filter.h"
+#include "decoded_filter.h"
 
 namespace zdenoise {
 namespace detail {

@@ -17,6 +17,7 @@
 
 #include "internal.h"
 #include "input_files.h"
+#include "output.h"
 #include "job_types.h"
 
 namespace zdenoise {
@@ -44,8 +45,6 @@ struct StripCost {
     /// (detail::kFilterTile, or kSelectionTile with select).
     double tile_pixel = 0;
     int tile          = 0;
-    /// Output rows are assembled and written this many at a time.
-    static constexpr int kBandRows = 32;
 
     double bytes(int rows) const
     {
@@ -55,7 +54,7 @@ struct StripCost {
         const double tile_h = std::min(held, double(tile) + 2.0 * halo);
         return fixed + file_row * held + held_pixel * width * held
                + core_pixel * width * double(rows)
-               + out_row * std::min(rows, kBandRows)
+               + out_row * std::min(rows, Output::kBandRows)
                + tile_pixel * tile_w * tile_h;
     }
 };

@@ -11,8 +11,8 @@
 #include <OpenImageIO/strutil.h>
 
 #include "failure.h"
+#include "internal.h"
 #include "layer_conventions.h"
-#include "memory_plan.h"
 #include "pixel_moves.h"
 
 namespace zdenoise {
@@ -201,8 +201,8 @@ Output::write(const Strip& strip, const RowReader& in,
     }
     const size_t row_bytes = pixel_bytes * size_t(width);
     for (int y0 = core.ybegin; y0 < core.yend;
-         y0 += StripCost::kBandRows) {
-        const int y1 = std::min(y0 + StripCost::kBandRows, core.yend);
+         y0 += kBandRows) {
+        const int y1 = std::min(y0 + kBandRows, core.yend);
         band.resize(row_bytes * size_t(y1 - y0));
         parallel_for(int64_t(y0), int64_t(y1), [&](int64_t y) {
             unsigned char* row = band.data() + size_t(y - y0) * row_bytes;

@@ -59,6 +59,8 @@ diagnostics_image(const LayersPlan& layers);
 
 /// Where the output of one strip comes from and goes to.
 struct Output {
+    /// Output rows are assembled and written this many at a time.
+    static constexpr int kBandRows = 32;
     OutputSink* sink = nullptr;
     OIIO::ImageSpec spec;
     std::vector<OutputChannel> channels;

@@ -1,8 +1,9 @@
 // Copyright zdenoise contributors.
 // SPDX-License-Identifier: BSD-3-Clause
 //
-// The inside of regression_filter() (regression_filter.cpp) that the
-// selection runs as its candidate 0.
+// Today's filter over inputs already decoded (decoded_filter.cpp): the
+// inside of regression_filter(), which the selection runs as its
+// candidate 0.
 
 #pragma once
 
