@@ -9,15 +9,10 @@
 #include <string>
 #include <vector>
 
-#include <OpenImageIO/imagebuf.h>
-
 #include <zdenoise/zdenoise.h>
 
 namespace zdenoise {
 namespace detail {
-
-using OIIO::ImageBuf;
-using OIIO::ROI;
 
 /// Check that `img` is a usable input of operation `opname`: initialized,
 /// not deep, 2D, at least `minchannels` channels, and its data window holds

@@ -6,16 +6,10 @@
 
 #pragma once
 
-
-#include <OpenImageIO/imagebuf.h>
-
 #include <zdenoise/zdenoise.h>
 
 namespace zdenoise {
 namespace detail {
-
-using OIIO::ImageBuf;
-using OIIO::ROI;
 
 /// The albedo that remodulates a quotient demodulated by `albedo` when a
 /// cleaner `remodulation_albedo` is given (zdenoise.h's remodulate() with
