@@ -57,6 +57,28 @@ denoise_static(const std::vector<synth::Scene>& frames, int t, int K,
     return zdenoise::denoise(c.radiance, s.albedo, g);
 }
 
+/// The scene with an albedo (and light with it) times a checker of 2x3
+/// pixels and normals tilted on a checker of 4x4, the same in every frame:
+/// a plane read a row or a column off shows.
+void
+vary_albedo_and_normals(synth::Scene& s)
+{
+    for (int y = 0; y < s.h; ++y)
+        for (int x = 0; x < s.w; ++x) {
+            const float t = ((x / 2 + y / 3) % 2) ? 1.0f : 0.6f;
+            float a[3], l[3], n[3];
+            s.albedo.getpixel(x, y, a, 3);
+            s.noisy.getpixel(x, y, l, 3);
+            s.normal.getpixel(x, y, n, 3);
+            for (int c = 0; c < 3; ++c)
+                a[c] *= t, l[c] *= t;
+            n[0] += ((x / 4 + y / 4) % 2) ? 0.35f : -0.35f;
+            s.albedo.setpixel(x, y, a, 3);
+            s.noisy.setpixel(x, y, l, 3);
+            s.normal.setpixel(x, y, n, 3);
+        }
+}
+
 /// Mean over pixels and RGB of the squared difference of two images.
 double
 mean_square_difference(const ImageBuf& a, const ImageBuf& b)
@@ -264,12 +286,15 @@ TEST(Temporal, RefusesANeighbourOfAnotherSize)
 
 // Per pixel, in a fixed order of neighbours: any thread count and any ROI
 // give the whole-image pixels bit for bit (the light test's box reads
-// around the ROI).
+// around the ROI). The albedo and normals vary from pixel to pixel, so that
+// a ROI's planes read at the wrong offset would show.
 TEST(Temporal, ThreadsAndRoiGiveTheWholeImagePixels)
 {
     std::vector<synth::Scene> frames;
-    for (int seed = 1; seed <= 3; ++seed)
+    for (int seed = 1; seed <= 3; ++seed) {
         frames.push_back(synth::staircase(64, 48, 8, { 8, uint32_t(200 + seed) }));
+        vary_albedo_and_normals(frames.back());
+    }
     const std::vector<zdenoise::TemporalFrame> neighbours = { scene_frame(frames[0]),
                                                               scene_frame(frames[2]) };
     zdenoise::TemporalCombined whole;
