@@ -452,4 +452,29 @@ holes(int w, int h, Noise noise)
     return s;
 }
 
+
+void
+vary_guides(Scene& s, bool depth_treads)
+{
+    for (int y = 0; y < s.h; ++y)
+        for (int x = 0; x < s.w; ++x) {
+            const float t = ((x / 2 + y / 3) % 2) ? 1.0f : 0.6f;
+            float a[3], l[3], n[3];
+            s.albedo.getpixel(x, y, a, 3);
+            s.noisy.getpixel(x, y, l, 3);
+            s.normal.getpixel(x, y, n, 3);
+            for (int c = 0; c < 3; ++c)
+                a[c] *= t, l[c] *= t;
+            n[0] += ((x / 4 + y / 4) % 2) ? 0.35f : -0.35f;
+            s.albedo.setpixel(x, y, a, 3);
+            s.noisy.setpixel(x, y, l, 3);
+            s.normal.setpixel(x, y, n, 3);
+            if (depth_treads) {
+                const float depth = s.depth.getchannel(x, y, 0, 0)
+                                    * (1.0f + 0.06f * ((y / 5) % 3));
+                s.depth.setpixel(x, y, &depth, 1);
+            }
+        }
+}
+
 }  // namespace synth

@@ -95,6 +95,13 @@ Scene corrugated_patch(int w, int h, Noise noise = {});
 /// channel only, and of NaN, +Inf or -Inf noisy radiance (never adjacent).
 Scene holes(int w, int h, Noise noise = {});
 
+/// Make `s`'s guides differ from row to row and column to column, so that
+/// a guide or albedo read a row or a column off shows in the output: its
+/// albedo (and light with it) times a checker of 2x3 pixels, its normals
+/// tilted on a checker of 4x4 pixels and, with `depth_treads`, its depth in
+/// treads of 5 rows (steps of 6 %, beyond the depth test's 2 %).
+void vary_guides(Scene& s, bool depth_treads);
+
 /// A float ImageBuf of w x h x nch from interleaved values.
 OIIO::ImageBuf make_image(int w, int h, int nch, const std::vector<float>& px);
 

@@ -22,37 +22,6 @@
 using OIIO::ImageBuf;
 using OIIO::ROI;
 
-namespace {
-
-/// The scene with guides that differ from row to row and column to
-/// column, so that a guide or albedo read a row or a column off shows in
-/// the output: its albedo (and light with it) times a checker of 2x3
-/// pixels, its depth in treads of 5 rows (steps of 6 %, beyond the depth
-/// test's 2 %), its normals tilted on a checker of 4x4 pixels.
-void
-vary_guides(synth::Scene& s)
-{
-    for (int y = 0; y < s.h; ++y)
-        for (int x = 0; x < s.w; ++x) {
-            const float t = ((x / 2 + y / 3) % 2) ? 1.0f : 0.6f;
-            float a[3], l[3], n[3];
-            s.albedo.getpixel(x, y, a, 3);
-            s.noisy.getpixel(x, y, l, 3);
-            s.normal.getpixel(x, y, n, 3);
-            for (int c = 0; c < 3; ++c)
-                a[c] *= t, l[c] *= t;
-            n[0] += ((x / 4 + y / 4) % 2) ? 0.35f : -0.35f;
-            const float depth = s.depth.getchannel(x, y, 0, 0) * (1.0f + 0.06f * ((y / 5) % 3));
-            s.albedo.setpixel(x, y, a, 3);
-            s.noisy.setpixel(x, y, l, 3);
-            s.normal.setpixel(x, y, n, 3);
-            s.depth.setpixel(x, y, &depth, 1);
-        }
-}
-
-}  // namespace
-
-
 TEST(FilterTiles, TiledFrameEqualsUntiledParts)
 {
     // Two internal tiles wide (1024 pixels, 2048 with the selection); the
@@ -61,7 +30,7 @@ TEST(FilterTiles, TiledFrameEqualsUntiledParts)
         SCOPED_TRACE(testing::Message() << "select " << select);
         const int tile = select ? 2048 : 1024, width = tile + 76;
         synth::Scene s = synth::shadow_edge(width, 24, { 64, 3 });
-        vary_guides(s);
+        synth::vary_guides(s, true);
         zdenoise::Guides g;
         g.variance = &s.variance;
         zdenoise::FilterOptions opt;
@@ -132,7 +101,7 @@ TEST(FilterTiles, StripsGivenTheFrameEqualTheWholeFrame)
     // guides vary from row to row, so that one cut at the wrong offset
     // would show.
     synth::Scene s = synth::two_objects_cryptomatte(40, 90, { 4, 7 });
-    vary_guides(s);
+    synth::vary_guides(s, true);
     const ImageBuf noisy = synth::shifted(s.noisy, 3, -5);
     const ImageBuf albedo = synth::shifted(s.albedo, 3, -5);
     const ImageBuf normal = synth::shifted(s.normal, 3, -5);
@@ -160,8 +129,9 @@ TEST(FilterTiles, StripsGivenTheFrameEqualTheWholeFrame)
         ASSERT_FALSE(whole.has_error()) << whole.geterror();
 
         const int halo = zdenoise::filter_halo(opt);
-        if (!select)
+        if (!select) {
             EXPECT_EQ(halo, 2 * opt.r_max + 6 + stride - 1);
+        }
         opt.frame = noisy.roi();
         int64_t windows = 0;
         const ROI f = noisy.roi();
@@ -203,7 +173,7 @@ TEST(FilterTiles, StripsGivenTheFrameEqualTheWholeFrame)
 TEST(FilterTiles, LayeredStripsGivenTheFrameEqualTheWholeFrame)
 {
     synth::Scene s = synth::staircase(36, 70, 8, { 4, 11 });
-    vary_guides(s);
+    synth::vary_guides(s, true);
     zdenoise::Layer layer;
     layer.name     = "diffuse";
     layer.radiance = &s.noisy;

@@ -57,27 +57,6 @@ denoise_static(const std::vector<synth::Scene>& frames, int t, int K,
     return zdenoise::denoise(c.radiance, s.albedo, g);
 }
 
-/// The scene with an albedo (and light with it) times a checker of 2x3
-/// pixels and normals tilted on a checker of 4x4, the same in every frame:
-/// a plane read a row or a column off shows.
-void
-vary_albedo_and_normals(synth::Scene& s)
-{
-    for (int y = 0; y < s.h; ++y)
-        for (int x = 0; x < s.w; ++x) {
-            const float t = ((x / 2 + y / 3) % 2) ? 1.0f : 0.6f;
-            float a[3], l[3], n[3];
-            s.albedo.getpixel(x, y, a, 3);
-            s.noisy.getpixel(x, y, l, 3);
-            s.normal.getpixel(x, y, n, 3);
-            for (int c = 0; c < 3; ++c)
-                a[c] *= t, l[c] *= t;
-            n[0] += ((x / 4 + y / 4) % 2) ? 0.35f : -0.35f;
-            s.albedo.setpixel(x, y, a, 3);
-            s.noisy.setpixel(x, y, l, 3);
-            s.normal.setpixel(x, y, n, 3);
-        }
-}
 
 /// Mean over pixels and RGB of the squared difference of two images.
 double
@@ -293,7 +272,7 @@ TEST(Temporal, ThreadsAndRoiGiveTheWholeImagePixels)
     std::vector<synth::Scene> frames;
     for (int seed = 1; seed <= 3; ++seed) {
         frames.push_back(synth::staircase(64, 48, 8, { 8, uint32_t(200 + seed) }));
-        vary_albedo_and_normals(frames.back());
+        synth::vary_guides(frames.back(), false);
     }
     const std::vector<zdenoise::TemporalFrame> neighbours = { scene_frame(frames[0]),
                                                               scene_frame(frames[2]) };
