@@ -6,19 +6,16 @@
 #include <zdenoise/zdenoise.h>
 
 #include "checks.h"
+#include "denoise.h"
 #include "internal.h"
 
 namespace zdenoise {
 
-namespace {
-
-/// Both forms of denoise(): remodulated by `remodulation` when given, else
-/// by `albedo`.
 bool
-denoise_(ImageBuf& dst, const ImageBuf& radiance, const ImageBuf& albedo,
-         const ImageBuf* remodulation, const Guides& guides,
-         const FilterOptions& options, FilterStats* stats, ROI roi,
-         int nthreads)
+detail::denoise_through(ImageBuf& dst, const ImageBuf& radiance,
+                        const ImageBuf& albedo, const ImageBuf* remodulation,
+                        const FilterOptions& options, ROI roi, int nthreads,
+                        int extra_halo, const QuotientFilter& filter)
 {
     const char* opname = "denoise";
     if (!detail::prepare_dst(dst, radiance, roi, opname)
@@ -33,7 +30,8 @@ denoise_(ImageBuf& dst, const ImageBuf& radiance, const ImageBuf& albedo,
         opt.frame = radiance.roi();
     if (!detail::check_frame(dst, opname, roi, opt.frame))
         return false;
-    ROI region    = detail::halo_region(roi, opt.frame, filter_halo(opt));
+    ROI region    = detail::halo_region(roi, opt.frame,
+                                        filter_halo(opt) + extra_halo);
     region.chbegin = 0;
     region.chend   = radiance.nchannels();
     if (!detail::check_input(dst, radiance, opname, "radiance", region, 3)
@@ -45,8 +43,7 @@ denoise_(ImageBuf& dst, const ImageBuf& radiance, const ImageBuf& albedo,
         dst.errorfmt("{}", quotient.geterror());
         return false;
     }
-    if (!regression_filter(filtered, quotient, albedo, guides, opt, stats,
-                           roi, nthreads)) {
+    if (!filter(filtered, quotient, opt)) {
         dst.errorfmt("{}", filtered.geterror());
         return false;
     }
@@ -59,6 +56,25 @@ denoise_(ImageBuf& dst, const ImageBuf& radiance, const ImageBuf& albedo,
     }
     return remodulate(dst, filtered, albedo, options.albedo_eps, roi,
                       nthreads);
+}
+
+namespace {
+
+/// Both forms of denoise(): remodulated by `remodulation` when given, else
+/// by `albedo`.
+bool
+denoise_(ImageBuf& dst, const ImageBuf& radiance, const ImageBuf& albedo,
+         const ImageBuf* remodulation, const Guides& guides,
+         const FilterOptions& options, FilterStats* stats, ROI roi,
+         int nthreads)
+{
+    return detail::denoise_through(
+        dst, radiance, albedo, remodulation, options, roi, nthreads, 0,
+        [&](ImageBuf& filtered, const ImageBuf& quotient,
+            const FilterOptions& opt) {
+            return regression_filter(filtered, quotient, albedo, guides, opt,
+                                     stats, roi, nthreads);
+        });
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <OpenImageIO/imagebufalgo.h>
 
 #include "checks.h"
+#include "denoise.h"
 #include "modulate.h"
 #include "internal.h"
 
@@ -93,32 +94,22 @@ filter_quotient(ImageBuf& filtered, const Layer& layer,
 
 
 /// A direct layer of radiance (not divided): demodulated, filtered as its
-/// quotient (filter_direct()), remodulated as denoise() does, so that the
-/// test and the significance filter see its light and not its texture.
+/// quotient (filter_direct(), which reads one pixel beyond roi), and
+/// remodulated as denoise() does, so that the test and the significance
+/// filter see its light and not its texture.
 bool
 denoise_direct_radiance(ImageBuf& out, const Layer& layer,
                         const Guides& guides, const FilterOptions& options,
                         FilterStats* stats, ROI roi, int nthreads)
 {
-    const ROI region = detail::halo_region(roi, options.frame,
-                                           filter_halo(options) + 1);
-    ImageBuf quotient, filtered;
-    if (!demodulate(quotient, *layer.radiance, *layer.albedo,
-                    options.albedo_eps, region, nthreads)) {
-        out.errorfmt("{}", quotient.geterror());
-        return false;
-    }
-    if (!filter_direct(filtered, quotient, *layer.albedo, guides, options,
-                       stats, roi, nthreads)) {
-        out.errorfmt("{}", filtered.geterror());
-        return false;
-    }
-    return layer.remodulation_albedo
-               ? remodulate(out, filtered, *layer.albedo,
-                            *layer.remodulation_albedo, options.albedo_eps,
-                            roi, nthreads)
-               : remodulate(out, filtered, *layer.albedo, options.albedo_eps,
-                            roi, nthreads);
+    return detail::denoise_through(
+        out, *layer.radiance, *layer.albedo, layer.remodulation_albedo,
+        options, roi, nthreads, 1,
+        [&](ImageBuf& filtered, const ImageBuf& quotient,
+            const FilterOptions& opt) {
+            return filter_direct(filtered, quotient, *layer.albedo, guides,
+                                 opt, stats, roi, nthreads);
+        });
 }
 
 

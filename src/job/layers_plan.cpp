@@ -420,11 +420,14 @@ route_direct_light(ImageBuf& quotient, const ImageBuf& colour,
     ROI one    = all;
     one.chbegin = 0;
     one.chend   = 1;
-    std::vector<float> d(3 * n), o(3 * n), q(3 * n), r(3 * n), vd(n), vo(n);
+    std::vector<float> d(3 * n), o(3 * n), q(3 * n), vd(n), vo(n);
     direct.get_pixels(rgb, TypeFloat, d.data());
     (partner ? rest : residual).get_pixels(rgb, TypeFloat, o.data());
     quotient.get_pixels(rgb, TypeFloat, q.data());
-    target.get_pixels(rgb, TypeFloat, r.data());
+    // The target's pixels: the residual's are `o` already.
+    std::vector<float> r = o;
+    if (partner)
+        partner->get_pixels(rgb, TypeFloat, r.data());
     v_direct.get_pixels(one, TypeFloat, vd.data());
     v_rest.get_pixels(one, TypeFloat, vo.data());
     const std::vector<float> yd = box_mean(luminance_plane(d), w, h, kPool);
