@@ -79,7 +79,8 @@ coverage_as_light(const CoveragePlane& p, const ROI& frame, ImageBuf& light,
 int
 alpha_halo(const FilterOptions& options)
 {
-    return filter_halo(options) + 1;
+    // The 3x3 of a solid pixel lies within the filter's halo.
+    return std::max(filter_halo(options), 1);
 }
 
 

@@ -6,7 +6,9 @@
 // true coverage, within [0, 1]; solid pixels (an object's inside, empty
 // film) keep their coverage bit for bit, so a hard silhouette is left
 // exactly as rendered; the result is the filter's on (a, a, a) over albedo
-// 1, clamped, whatever the threads or the part computed.
+// 1, clamped, whatever the threads or the part computed. The command
+// denoises a Cycles render's Combined.A by default, keeps the colour of
+// pixels left uncovered as rendered, and --no-alpha copies the alpha.
 
 #include <algorithm>
 #include <cmath>
@@ -18,6 +20,8 @@
 #include <OpenImageIO/imagebufalgo.h>
 
 #include <zdenoise/alpha.h>
+
+#include "cli_test.h"
 
 using namespace OIIO;
 
@@ -179,4 +183,119 @@ TEST(Alpha, SameResultForAnyThreadCountAndPart)
     for (int y = part.ybegin; y < part.yend; ++y)
         for (int x = part.xbegin; x < part.xend; ++x)
             ASSERT_EQ(at(piece, x, y), at(one, x, y)) << "(" << x << "," << y << ")";
+}
+
+
+namespace {
+
+/// A Cycles render of the moving object over transparent film, `spp`
+/// samples a pixel: coverage and colour (premultiplied: the hits' light)
+/// from the same samples. The albedo is the object's everywhere, as an
+/// auxiliary render's can be, so that the filter's light reaches the
+/// empty film.
+void
+write_blurred_render(const std::string& file, int spp, bool solid = false)
+{
+    std::mt19937 rng(29);
+    std::normal_distribution<float> light_noise(0.0f, 0.3f);
+    ImageSpec spec(W, H, 7, TypeFloat);
+    spec.channelnames = { "ViewLayer.Combined.R", "ViewLayer.Combined.G",
+                          "ViewLayer.Combined.B", "ViewLayer.Combined.A",
+                          "ViewLayer.Denoising Albedo.R",
+                          "ViewLayer.Denoising Albedo.G",
+                          "ViewLayer.Denoising Albedo.B" };
+    spec.alpha_channel = 3;
+    ImageBuf img(spec);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const float p = solid ? (x < W / 2 ? 0.0f : 1.0f) : true_coverage(x);
+            int hits      = 0;
+            float light   = 0.0f;
+            for (int s = 0; s < spp; ++s)
+                if (std::uniform_real_distribution<float>(0, 1)(rng) < p) {
+                    ++hits;
+                    light += std::max(0.6f * (1.0f + light_noise(rng)), 0.0f);
+                }
+            const float a = float(hits) / float(spp), l = light / float(spp);
+            const float px[7] = { l, 0.8f * l, 0.6f * l, a, 0.5f, 0.4f, 0.3f };
+            img.setpixel(x, y, px, 7);
+        }
+    ASSERT_TRUE(img.write(file)) << img.geterror();
+}
+
+ImageBuf
+read_float(const std::string& file)
+{
+    ImageBuf img(file);
+    EXPECT_TRUE(img.read(0, 0, true, TypeFloat)) << img.geterror();
+    return img;
+}
+
+class AlphaCli : public cli_test::CliTest {};
+
+}  // namespace
+
+
+TEST_F(AlphaCli, ACyclesAlphaIsDenoisedAndUncoveredPixelsKeepTheirColour)
+{
+    write_blurred_render(path("blur.exr"), 16);
+    const cli_test::RunResult res = run("--in " + path("blur.exr") + " -o " + path("out.exr") + " -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_NE(res.out.find("alpha     '" + path("blur.exr")
+                           + "' channel ViewLayer.Combined.A denoised"),
+              std::string::npos)
+        << res.out;
+    ASSERT_EQ(run("--in " + path("blur.exr") + " -o " + path("copied.exr") + " --no-alpha")
+                  .status,
+              0);
+    const ImageBuf in = read_float(path("blur.exr")), out = read_float(path("out.exr")),
+                   copied = read_float(path("copied.exr"));
+    ImageBuf a_in, a_out, a_copied;
+    ImageBufAlgo::channels(a_in, in, 1, { 3 });
+    ImageBufAlgo::channels(a_out, out, 1, { 3 });
+    ImageBufAlgo::channels(a_copied, copied, 1, { 3 });
+    const double before = blur_mse(a_in), after = blur_mse(a_out);
+    std::printf("  command, 16 spp: alpha MSE over the blur %.5f -> %.5f\n", before, after);
+    EXPECT_LT(after, 0.6 * before);
+    EXPECT_EQ(ImageBufAlgo::compare(a_copied, a_in, 0.0f, 0.0f).nfail, 0u)
+        << "--no-alpha copies the alpha";
+    int uncovered = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            float o[7], i[7], c[7];
+            out.getpixel(x, y, o, 7);
+            in.getpixel(x, y, i, 7);
+            copied.getpixel(x, y, c, 7);
+            ASSERT_TRUE(o[3] >= 0.0f && o[3] <= 1.0f) << "(" << x << "," << y << ")";
+            for (int k = 0; k < 3; ++k)
+                if (o[3] == 0.0f) {
+                    ++uncovered;
+                    ASSERT_EQ(o[k], i[k]) << "uncovered (" << x << "," << y << ")";
+                } else {
+                    ASSERT_EQ(o[k], c[k]) << "the colour of a covered pixel is the "
+                                             "filter's, alpha or not ("
+                                          << x << "," << y << ")";
+                }
+        }
+    EXPECT_GT(uncovered, W * H / 4) << "the empty film is uncovered";
+
+    ASSERT_EQ(run("--in " + path("blur.exr") + " -o " + path("strips.exr") + " --tile 8")
+                  .status,
+              0);
+    EXPECT_EQ(ImageBufAlgo::compare(read_float(path("strips.exr")), out, 0.0f, 0.0f).nfail,
+              0u)
+        << "strips of 8 rows give the whole frame's alpha and colour";
+}
+
+
+TEST_F(AlphaCli, ASolidAlphaChangesNothing)
+{
+    write_blurred_render(path("solid.exr"), 16, true);
+    ASSERT_EQ(run("--in " + path("solid.exr") + " -o " + path("out.exr")).status, 0);
+    ASSERT_EQ(run("--in " + path("solid.exr") + " -o " + path("copied.exr") + " --no-alpha")
+                  .status,
+              0);
+    const ImageBuf out = read_float(path("out.exr")), copied = read_float(path("copied.exr"));
+    EXPECT_EQ(ImageBufAlgo::compare(out, copied, 0.0f, 0.0f).nfail, 0u)
+        << "an alpha of 0 and 1 only is left as rendered, and the colour with it";
 }

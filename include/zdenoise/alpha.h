@@ -15,7 +15,7 @@
 namespace zdenoise {
 
 /// The rows and columns around an output pixel that denoise_alpha() reads:
-/// filter_halo(options) and the 3x3 that tells a solid pixel.
+/// filter_halo(options) (which holds the 3x3 that tells a solid pixel).
 ZDENOISE_API int alpha_halo(const FilterOptions& options = {});
 
 /// Denoise the coverage in channel 0 of `alpha` with the render's guides.

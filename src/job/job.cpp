@@ -21,6 +21,7 @@
 #include <OpenImageIO/strutil.h>
 #include <OpenImageIO/timer.h>
 
+#include "alpha_plan.h"
 #include "atomic_write.h"
 #include "colour_plan.h"
 #include "diagnostics_picture.h"
@@ -183,6 +184,12 @@ log_roles(const Job& j, InputFiles& files, const Plan& p, JobResult& result)
             channel_list(files.header(s.path).channelnames, s.indices)));
     };
     show("radiance", p.roles.radiance);
+    const int alpha = denoised_alpha_channel(j, p.roles.radiance);
+    if (alpha >= 0)
+        result.log.push_back(format(
+            "  alpha     '{}' channel {} denoised where fractional "
+            "(--no-alpha copies it)",
+            j.in.path, in.channelnames[size_t(alpha)]));
     if (!p.layered)
         show("albedo", p.roles.albedo);
     for (const OptionalRole* o : p.roles.optional())
@@ -320,6 +327,8 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
     }
     const RoleSelections& roles = p.roles;
     RoleImages img = read_role_images(j, p, strip);
+    const bool alpha = denoised_alpha_channel(j, roles.radiance) >= 0;
+    const ImageBuf held_alpha = alpha ? strip_alpha(j, img.radiance) : ImageBuf();
     // Over what the filter reads: the strip and its halo (and with
     // --temporal, the light test's box around it).
     if (!p.layered)  // the layers' colours: load_layers()
@@ -368,6 +377,10 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
     if (!ok)
         fail(format("denoising '{}' failed: {}", j.in.path,
                     one_line(denoised.geterror())));
+    ImageBuf denoised_alpha;
+    if (alpha)
+        denoise_strip_alpha(j, strip, p.noisy, held_alpha, guides,
+                            denoised_alpha);
     result.denoise_seconds += denoise_timer();
     // Statistics summed over the strips (exact sums: they do not depend
     // on the strips).
@@ -383,6 +396,8 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
         images.push_back(&l);
     if (j.diagnostics)
         images.push_back(&maps);  // at diagnostics_image(p.layers)
+    if (alpha)
+        images.push_back(&denoised_alpha);  // at alpha_image(j, p.layers)
     if (!j.diagnostics_png.empty() && !p.picture.keep(maps, strip.core))
         fail(format("--diagnostics-png: {}", one_line(maps.geterror())));
     p.output.write(strip, files.rows(j.in.path), images, j.threads);

@@ -61,6 +61,9 @@ struct Job {
     std::string residual;
     /// Also write each denoised layer as NAME.R,G,B (--aovs).
     bool write_layers = false;
+    /// Copy the beauty's alpha as it is (--no-alpha); by default a
+    /// fractional alpha is denoised (alpha_plan.h).
+    bool no_alpha = false;
     /// Samples per pixel of the albedo for its prefilter
     /// (prefilter_albedo(); --albedo-samples); 0: the render's count from
     /// its metadata when the albedo is the --in file's and no --aux is

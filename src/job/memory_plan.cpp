@@ -7,6 +7,7 @@
 
 #include <OpenImageIO/strutil.h>
 
+#include "alpha_plan.h"
 #include "failure.h"
 #include "strips.h"
 #include "strip_plan.h"
@@ -101,6 +102,7 @@ strip_cost(const Job& j, const Plan& p, InputFiles& files,
     cost.height = p.noisy.height();
     // A direct layer's keep_structure() reads one pixel beyond the strip.
     cost.halo   = filter_halo(j.filter) + (p.path ? 1 : 0);
+    const bool alpha = denoised_alpha_channel(j, p.roles.radiance) >= 0;
     // The residual layer's mask looks further than the filter.
     cost.around = cost.halo + p.layers.reach
                   + p.albedo.halo();
@@ -111,6 +113,12 @@ strip_cost(const Job& j, const Plan& p, InputFiles& files,
     cost.held_pixel = role_bytes(files, p.roles.radiance, p.radiance_as_is)
                       + 16.0;
     cost.core_pixel = 32.0;
+    // The alpha (denoise_alpha()): its plane, the coverage as light and its
+    // albedo of 1 (held), and the result (strip).
+    if (alpha) {
+        cost.held_pixel += 4.0 + 24.0;
+        cost.core_pixel += 4.0 + 12.0;
+    }
     if (!p.layered)
         cost.held_pixel += role_bytes(files, p.roles.albedo, p.albedo_as_is);
     for (const OptionalRole* o : p.roles.optional())

@@ -86,6 +86,7 @@ Layers (docs/LAYERS.md):
 Output:
 {-o}
 {-d}
+{--no-alpha}
 {--force}
 {--write-recipe}
 {--diagnostics}
@@ -206,6 +207,11 @@ options()
         { Kind::Flag, "--no-id", "no-id", FIELD(job.no_id), "", nullptr },
         { Kind::Flag, "--aovs", "aovs", FIELD(job.write_layers), "",
           "Also write each denoised layer as NAME.R,G,B." },
+        { Kind::Flag, "--no-alpha", "no-alpha", FIELD(job.no_alpha), "",
+          "Copy the beauty's alpha as it is. Default: where it is\n"
+          "fractional (motion blur, depth of field, transparent\n"
+          "film) it is denoised with the render's guides\n"
+          "(docs/ALPHA.md)." },
         { Kind::Flag, "--diagnostics", "diagnostics", FIELD(job.diagnostics), "",
           "Add the filter's maps to the output: zdenoise.radius,\n"
           "zdenoise.stop (1 quality, 2 size, 3 edge, 0 not\n"

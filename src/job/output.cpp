@@ -10,6 +10,7 @@
 #include <OpenImageIO/parallel.h>
 #include <OpenImageIO/strutil.h>
 
+#include "alpha_plan.h"
 #include "failure.h"
 #include "internal.h"
 #include "layer_conventions.h"
@@ -127,6 +128,10 @@ layout_output(const Job& j, const InputHeader& in, const Selection& radiance,
         put_channels(spec, channels, diagnostics_image(layers), maps,
                      TypeFloat);
     }
+    const int alpha = denoised_alpha_channel(j, radiance);
+    if (alpha >= 0)
+        channels[size_t(alpha)] = { -1, alpha_image(j, layers), 0,
+                                    in.format(alpha) };
     formats = write_formats(spec, channels, j.data_type);
 }
 
@@ -135,6 +140,13 @@ int
 diagnostics_image(const LayersPlan& layers)
 {
     return 1 + int(layers.layers.size());
+}
+
+
+int
+alpha_image(const Job& j, const LayersPlan& layers)
+{
+    return diagnostics_image(layers) + (j.diagnostics ? 1 : 0);
 }
 
 

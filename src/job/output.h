@@ -34,8 +34,9 @@ struct OutputChannel {
 /// channels `radiance` selects) replaced and, with --aovs, the denoised
 /// layers of `layers` added; each channel in its input pixel type unless
 /// -d says otherwise, Cryptomatte float; with --diagnostics the maps
-/// added. Images: 0 the denoised beauty, 1 + i layer i, then the maps
-/// (diagnostics_image()). `spec` is as an ImageBuf of the --in file's pixels has
+/// added; the alpha that job `j` denoises from the denoised alpha. Images:
+/// 0 the denoised beauty, 1 + i layer i, then the maps (diagnostics_image()),
+/// then the alpha (alpha_image()). `spec` is as an ImageBuf of the --in file's pixels has
 /// it (part 0's spec, the channels and metadata of every part).
 void
 layout_output(const Job& j, const InputHeader& in, const Selection& radiance,
@@ -56,6 +57,11 @@ native_spec(const OIIO::ImageSpec& spec,
 /// images: after the beauty and the layers.
 int
 diagnostics_image(const LayersPlan& layers);
+
+/// The index of the denoised alpha (alpha_plan.h) among the denoised
+/// images: after the maps.
+int
+alpha_image(const Job& j, const LayersPlan& layers);
 
 /// Where the output of one strip comes from and goes to.
 struct Output {
