@@ -1,0 +1,76 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// Light groups (docs/LIGHT_GROUPS.md): the beauty split by the lights
+// that lit it (Cycles' Combined_<group>, Arnold's RGBA_<group>), each
+// group denoised so that the groups add up to the denoised beauty.
+// Conventions as in zdenoise.h (ImageBufAlgo style, bit-identical for
+// every thread count, any ROI computed exactly).
+
+#pragma once
+
+#include <vector>
+
+#include <zdenoise/zdenoise.h>
+
+namespace zdenoise {
+
+/// How split_light_groups() estimates each group's share of the light.
+struct LightGroupOptions {
+    /// Half-size of the window over which a pixel's shares are estimated.
+    int radius = 6;
+    /// Neighbours whose denoised light differs from the pixel's by much
+    /// more than this (a symmetric relative difference per channel,
+    /// (a - b) / (|a| + |b|), in a Gaussian of this deviation) are lit
+    /// otherwise and count little: a shadow edge of one light keeps that
+    /// light's share apart on its two sides.
+    float tolerance = 0.1f;
+};
+
+/// The rows and columns around an output pixel that split_light_groups()
+/// reads.
+ZDENOISE_API int light_groups_halo(const LightGroupOptions& options = {});
+
+/// Split the denoised beauty among light groups by their shares of the
+/// light around each pixel.
+///
+/// The noisy groups G_k (and the rest, the beauty minus their sum, where
+/// positive) are summed over a window around each pixel, each neighbour
+/// weighted by the filter's guide weight g(q; p) (docs/FILTER.md section
+/// 4: normal, depth, object id, with `filter`'s normal_cut, normal_power
+/// and depth_tolerance), a spatial term exp(-d^2 / radius^2) and the
+/// likeness of its denoised light to the pixel's (`tolerance`); group k
+/// gets the denoised beauty times its sum over the sum of all, per
+/// channel. So every group is the denoised beauty's light, the groups and
+/// the rest add up to it exactly (to rounding), no group is negative, and
+/// the weights are computed once for all groups. Negative group values
+/// count as 0.
+///
+/// @param dst       Receives one image per group (3 float channels over
+///                  roi): resized to groups.size() (at least 1); each
+///                  allocated when uninitialised, else it must hold roi
+///                  and 3 channels.
+/// @param denoised  The denoised beauty (RGB), over roi widened by
+///                  light_groups_halo() and clipped to the frame.
+/// @param beauty    The noisy beauty (RGB), over the same pixels.
+/// @param groups    The noisy light groups (RGB each), over the same
+///                  pixels. At least one.
+/// @param guides    The normal, depth and object id guides, over the same
+///                  pixels (the noise guides are not used).
+/// @param filter    The filter's options: its guide-weight parameters and
+///                  `frame`, as for denoise().
+/// @param options   The share window.
+/// @param roi       The output pixels; default: the denoised beauty's data
+///                  window.
+/// @param nthreads  Threads; 0 = all.
+/// @return false with an error on dst[0] for an unusable input.
+ZDENOISE_API bool split_light_groups(std::vector<ImageBuf>& dst,
+                                     const ImageBuf& denoised,
+                                     const ImageBuf& beauty,
+                                     const std::vector<const ImageBuf*>& groups,
+                                     const Guides& guides = {},
+                                     const FilterOptions& filter = {},
+                                     const LightGroupOptions& options = {},
+                                     ROI roi = {}, int nthreads = 0);
+
+}  // namespace zdenoise

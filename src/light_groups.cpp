@@ -1,0 +1,227 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// split_light_groups() (include/zdenoise/light_groups.h,
+// docs/LIGHT_GROUPS.md): each group's share of the light, estimated as a
+// ratio of window sums with weights that every group shares, times the
+// denoised beauty. The stages, in order:
+//   decode_guides()   the guide planes GuideWeight reads
+//   read_planes()     the denoised and noisy beauty and the groups
+//   pixel_shares()    one pixel's ratio of sums, and its groups
+
+#include <zdenoise/light_groups.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "checks.h"
+#include "filter/filter_inputs.h"
+#include "filter/guide_weight.h"
+#include "filter/pixel_classes.h"
+#include "internal.h"
+
+namespace zdenoise {
+
+using namespace OIIO;
+using namespace detail;
+
+namespace {
+
+/// The light over the region: the denoised beauty, and the noisy groups
+/// followed by the rest (the beauty minus the groups), each clamped at 0;
+/// 3 floats a pixel each.
+struct GroupPlanes {
+    std::vector<float> denoised;
+    std::vector<std::vector<float>> parts;  ///< the groups, then the rest
+};
+
+/// The guide planes of `guides` over in.region as GuideWeight reads them.
+bool
+decode_guides(FilterInputs& in, ImageBuf& err, const Guides& guides,
+              const std::vector<float>& light, const FilterOptions& filter,
+              int nthreads)
+{
+    const size_t n = in.region.npixels();
+    if (guides.normal)
+        decode_normals(in, *guides.normal);
+    if (guides.object_id && !decode_object_ids(in, err, *guides.object_id))
+        return false;
+    std::vector<float> depth;
+    if (guides.depth)
+        depth = read_channels(*guides.depth, in.region, 0, 1);
+    // The classes' quotient and albedo: only kSurface and the inverse
+    // depth are read here.
+    const std::vector<float> ones(3 * n, 1.0f);
+    classify_pixels(in, light, ones, {}, depth, filter.albedo_eps, nthreads);
+    in.cls.resize(n + kPlanePadding, 0);
+    if (!in.invdepth.empty())
+        in.invdepth.resize(n + kPlanePadding, 0.0f);
+    return true;
+}
+
+GroupPlanes
+read_planes(const ROI& region, const ImageBuf& denoised, const ImageBuf& beauty,
+            const std::vector<const ImageBuf*>& groups)
+{
+    GroupPlanes p;
+    p.denoised = read_channels(denoised, region, 0, 3);
+    std::vector<float> rest = read_channels(beauty, region, 0, 3);
+    for (const ImageBuf* g : groups) {
+        std::vector<float> light = read_channels(*g, region, 0, 3);
+        for (size_t i = 0; i < light.size(); ++i) {
+            rest[i] -= light[i];
+            light[i] = std::max(light[i], 0.0f);  // NaN -> 0
+        }
+        p.parts.push_back(std::move(light));
+    }
+    for (float& v : rest)
+        v = std::max(v, 0.0f);
+    p.parts.push_back(std::move(rest));
+    return p;
+}
+
+/// Pixel (x, y)'s groups (3 floats each, into out[k]) from the window sums.
+void
+pixel_shares(const FilterInputs& in, const GroupPlanes& p, GuideWeight& gw,
+             const LightGroupOptions& opt, int x, int y,
+             std::vector<float>& g, std::vector<double>& sums,
+             std::vector<float*>& out)
+{
+    const size_t nparts = p.parts.size();
+    std::fill(sums.begin(), sums.end(), 0.0);
+    const size_t c0 = in.index(x, y);
+    const float* b0 = &p.denoised[3 * c0];
+    const int r = opt.radius;
+    const int xb = std::max(x - r, in.region.xbegin);
+    const int xe = std::min(x + r + 1, in.region.xend);
+    const float inv_r2  = 1.0f / float(r * r);
+    const float inv_t2  = 1.0f / (opt.tolerance * opt.tolerance);
+    gw.centre(x, y);
+    for (int v = std::max(y - r, in.region.ybegin);
+         v < std::min(y + r + 1, in.region.yend); ++v) {
+        gw.row(xb, v, xe - xb, g.data());
+        for (int u = xb; u < xe; ++u) {
+            // g(p; p) is 1 even where p is no surface (no depth).
+            const float guide = u == x && v == y ? 1.0f : g[size_t(u - xb)];
+            if (!(guide > 0.0f))
+                continue;
+            const size_t q = in.index(u, v);
+            const float* bq = &p.denoised[3 * q];
+            float like = 0.0f;
+            for (int c = 0; c < 3; ++c) {
+                const float s = std::fabs(b0[c]) + std::fabs(bq[c]);
+                const float d = s > 0.0f ? (bq[c] - b0[c]) / s : 0.0f;
+                like += d * d;
+            }
+            const float d2 = float((u - x) * (u - x) + (v - y) * (v - y));
+            const float w  = guide * std::exp(-(d2 * inv_r2 + like * inv_t2 / 3.0f));
+            if (!(w > 0.0f))
+                continue;
+            for (size_t k = 0; k < nparts; ++k)
+                for (int c = 0; c < 3; ++c)
+                    sums[3 * k + size_t(c)] += double(w) * p.parts[k][3 * q + size_t(c)];
+        }
+    }
+    for (int c = 0; c < 3; ++c) {
+        double total = 0.0;
+        for (size_t k = 0; k < nparts; ++k)
+            total += sums[3 * k + size_t(c)];
+        const double b = std::isfinite(b0[c]) ? double(b0[c]) : 0.0;
+        for (size_t k = 0; k + 1 < nparts; ++k)
+            out[k][c] = total > 0.0 ? float(b * sums[3 * k + size_t(c)] / total)
+                                    : 0.0f;
+    }
+}
+
+bool
+check_group_inputs(ImageBuf& err, const ImageBuf& denoised, const ImageBuf& beauty,
+                   const std::vector<const ImageBuf*>& groups, const Guides& guides,
+                   const ROI& roi, const ROI& frame, const ROI& need)
+{
+    const char* opname = "split_light_groups";
+    if (groups.empty()) {
+        err.errorfmt("{}: no light group given", opname);
+        return false;
+    }
+    if (!check_input(err, denoised, opname, "denoised beauty", need, 3)
+        || !check_frame(err, opname, roi, frame)
+        || !check_input(err, beauty, opname, "beauty", need, 3)
+        || !check_guides(err, guides, opname, need))
+        return false;
+    for (const ImageBuf* g : groups)
+        if (!g || !check_input(err, *g, opname, "light group", need, 3))
+            return false;
+    return true;
+}
+
+}  // namespace
+
+
+int
+light_groups_halo(const LightGroupOptions& options)
+{
+    return std::max(options.radius, 1);
+}
+
+
+bool
+split_light_groups(std::vector<ImageBuf>& dst, const ImageBuf& denoised,
+                   const ImageBuf& beauty,
+                   const std::vector<const ImageBuf*>& groups,
+                   const Guides& guides, const FilterOptions& filter,
+                   const LightGroupOptions& options, ROI roi, int nthreads)
+{
+    const char* opname = "split_light_groups";
+    dst.resize(std::max(groups.size(), size_t(1)));
+    ImageBuf& err = dst[0];
+    if (!denoised.initialized()) {
+        err.errorfmt("{}: the denoised beauty is not initialized", opname);
+        return false;
+    }
+    if (options.radius < 1 || !(options.tolerance > 0.0f)) {
+        err.errorfmt("{}: radius must be at least 1 and tolerance positive",
+                     opname);
+        return false;
+    }
+    if (!roi.defined())
+        roi = denoised.roi();
+    const ROI frame = filter.frame.defined() ? filter.frame : denoised.roi();
+    FilterInputs in;
+    in.region = halo_region(roi, frame, light_groups_halo(options));
+    in.image  = frame;
+    in.width  = in.region.width();
+    in.height = in.region.height();
+    if (!check_group_inputs(err, denoised, beauty, groups, guides, roi, frame,
+                            in.region))
+        return false;
+    const GroupPlanes planes = read_planes(in.region, denoised, beauty, groups);
+    if (!decode_guides(in, err, guides, planes.denoised, filter, nthreads))
+        return false;
+    for (ImageBuf& d : dst)
+        if (!prepare_result(err, d, roi, frame, 3, opname, "dst"))
+            return false;
+    const size_t k = groups.size();
+    std::vector<std::vector<float>> out(k, std::vector<float>(3 * roi.npixels()));
+    for_rows(roi, nthreads, [&](int y) {
+        GuideWeight gw(in, filter);
+        std::vector<float> g(size_t(2 * options.radius + 1) + kPlanePadding);
+        std::vector<double> sums(3 * (k + 1));
+        std::vector<float*> px(k);
+        for (int x = roi.xbegin; x < roi.xend; ++x) {
+            const size_t i = size_t(y - roi.ybegin) * size_t(roi.width())
+                             + size_t(x - roi.xbegin);
+            for (size_t j = 0; j < k; ++j)
+                px[j] = &out[j][3 * i];
+            pixel_shares(in, planes, gw, options, x, y, g, sums, px);
+        }
+    });
+    ROI rgb    = roi;
+    rgb.chbegin = 0;
+    rgb.chend   = 3;
+    for (size_t j = 0; j < k; ++j)
+        dst[j].set_pixels(rgb, TypeFloat, out[j].data());
+    return true;
+}
+
+}  // namespace zdenoise

@@ -1,0 +1,234 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// split_light_groups() (include/zdenoise/light_groups.h,
+// docs/LIGHT_GROUPS.md): on a textured floor lit by a key light with a hard
+// shadow edge, a smooth fill and a constant sky, each denoised group is at
+// most half its noisy relMSE, the key's shadow edge stays in the key's
+// group, the groups add up to the denoised beauty, none is negative and
+// none gains energy, whatever the threads or the part computed.
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/imagebufalgo.h>
+
+#include <zdenoise/light_groups.h>
+
+using namespace OIIO;
+
+namespace {
+
+constexpr int W = 96, H = 64;
+constexpr int kEdge = 40;  ///< the key's shadow begins at this column
+
+float
+albedo(int x, int y)
+{
+    return ((x / 4 + y / 4) % 2) ? 0.7f : 0.35f;
+}
+
+/// Group k's clean light at (x, y): 0 key, 1 fill, 2 sky.
+float
+clean_light(int k, int x, int y)
+{
+    switch (k) {
+    case 0: return x < kEdge ? 1.0f : 0.0f;
+    case 1: return 0.3f * (0.6f + 0.4f * float(y) / H);
+    default: return 0.1f;
+    }
+}
+
+const float kTint[3][3] = { { 1.0f, 0.9f, 0.7f }, { 0.6f, 0.7f, 1.0f }, { 0.5f, 0.6f, 0.9f } };
+
+struct GroupScene {
+    ImageBuf clean[3], noisy[3], beauty, beauty_clean, albedo_img;
+};
+
+GroupScene
+make_scene(float sigma, uint32_t seed)
+{
+    std::mt19937 rng(seed);
+    std::gamma_distribution<float> gamma(1.0f / (sigma * sigma), sigma * sigma);
+    GroupScene s;
+    const ImageSpec spec(W, H, 3, TypeFloat);
+    for (int k = 0; k < 3; ++k) {
+        s.clean[k].reset(spec);
+        s.noisy[k].reset(spec);
+    }
+    s.beauty.reset(spec);
+    s.beauty_clean.reset(spec);
+    s.albedo_img.reset(spec);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            float b[3] = {}, bc[3] = {};
+            const float a = albedo(x, y);
+            const float al[3] = { a, a, a };
+            s.albedo_img.setpixel(x, y, al, 3);
+            for (int k = 0; k < 3; ++k) {
+                const float m = gamma(rng);  // mean 1, deviation sigma
+                float c[3], n[3];
+                for (int ch = 0; ch < 3; ++ch) {
+                    c[ch] = a * clean_light(k, x, y) * kTint[k][ch];
+                    n[ch] = c[ch] * m;
+                    b[ch] += n[ch];
+                    bc[ch] += c[ch];
+                }
+                s.clean[k].setpixel(x, y, c, 3);
+                s.noisy[k].setpixel(x, y, n, 3);
+            }
+            s.beauty.setpixel(x, y, b, 3);
+            s.beauty_clean.setpixel(x, y, bc, 3);
+        }
+    return s;
+}
+
+double
+relmse(const ImageBuf& img, const ImageBuf& ref)
+{
+    double sum = 0.0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            float a[3], r[3];
+            img.getpixel(x, y, a, 3);
+            ref.getpixel(x, y, r, 3);
+            for (int c = 0; c < 3; ++c)
+                sum += double(a[c] - r[c]) * (a[c] - r[c]) / (double(r[c]) * r[c] + 1e-2);
+        }
+    return sum / (3.0 * W * H);
+}
+
+double
+column_mean(const ImageBuf& img, int x0, int x1)
+{
+    double sum = 0.0;
+    for (int y = 0; y < H; ++y)
+        for (int x = x0; x < x1; ++x) {
+            float a[3];
+            img.getpixel(x, y, a, 3);
+            sum += a[0] + a[1] + a[2];
+        }
+    return sum / (3.0 * H * (x1 - x0));
+}
+
+std::vector<const ImageBuf*>
+noisy_groups(const GroupScene& s)
+{
+    return { &s.noisy[0], &s.noisy[1], &s.noisy[2] };
+}
+
+}  // namespace
+
+
+TEST(LightGroups, EachGroupIsDenoisedAndTheyAddUpToTheDenoisedBeauty)
+{
+    for (float sigma : { 0.5f, 1.0f }) {
+        const GroupScene s = make_scene(sigma, 17);
+        const ImageBuf denoised = zdenoise::denoise(s.beauty, s.albedo_img);
+        ASSERT_FALSE(denoised.has_error()) << denoised.geterror();
+        std::vector<ImageBuf> groups;
+        ASSERT_TRUE(zdenoise::split_light_groups(groups, denoised, s.beauty,
+                                                 noisy_groups(s)))
+            << groups[0].geterror();
+        ASSERT_EQ(groups.size(), 3u);
+        for (int k = 0; k < 3; ++k) {
+            const double before = relmse(s.noisy[k], s.clean[k]);
+            const double after  = relmse(groups[size_t(k)], s.clean[k]);
+            std::printf("  noise %.1f, group %d: relMSE %.5f -> %.5f (%.2fx); "
+                        "energy %.4f of the clean\n",
+                        sigma, k, before, after, after / before,
+                        column_mean(groups[size_t(k)], 0, W) / column_mean(s.clean[k], 0, W));
+            EXPECT_LT(after, 0.5 * before) << "group " << k;
+            EXPECT_LT(column_mean(groups[size_t(k)], 0, W),
+                      1.03 * column_mean(s.noisy[k], 0, W))
+                << "group " << k << " gains energy";
+        }
+        // The key's shadow: its group keeps the edge (no key light two
+        // columns into the shadow), the fill's and the sky's do not take it.
+        const double lit = column_mean(groups[0], kEdge - 6, kEdge - 2);
+        const double dark = column_mean(groups[0], kEdge + 2, kEdge + 6);
+        EXPECT_LT(dark, 0.03 * lit) << "the key's shadow edge in the key's group";
+        // Without the likeness term the edge spreads: the test sees it.
+        zdenoise::LightGroupOptions blind;
+        blind.tolerance = 1e3f;
+        std::vector<ImageBuf> spread;
+        ASSERT_TRUE(zdenoise::split_light_groups(spread, denoised, s.beauty,
+                                                 noisy_groups(s), {}, {}, blind));
+        EXPECT_GT(column_mean(spread[0], kEdge + 2, kEdge + 6), 0.03 * lit);
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                float sum[3] = {}, d[3];
+                denoised.getpixel(x, y, d, 3);
+                for (const ImageBuf& g : groups) {
+                    float v[3];
+                    g.getpixel(x, y, v, 3);
+                    for (int c = 0; c < 3; ++c) {
+                        ASSERT_GE(v[c], 0.0f);
+                        sum[c] += v[c];
+                    }
+                }
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_NEAR(sum[c], d[c], 1e-5f * std::fabs(d[c]) + 1e-7f)
+                        << "(" << x << "," << y << ") channel " << c;
+            }
+    }
+}
+
+
+TEST(LightGroups, WhatTheGroupsDoNotCoverIsLeftToTheRest)
+{
+    // Only the key and the fill are groups: the sky's light is the rest.
+    const GroupScene s = make_scene(0.5f, 5);
+    const ImageBuf denoised = zdenoise::denoise(s.beauty, s.albedo_img);
+    std::vector<ImageBuf> groups;
+    ASSERT_TRUE(zdenoise::split_light_groups(groups, denoised, s.beauty,
+                                             { &s.noisy[0], &s.noisy[1] }));
+    const double sky_share = 1.0 - (column_mean(groups[0], 0, W) + column_mean(groups[1], 0, W))
+                                       / column_mean(denoised, 0, W);
+    const double clean_share = column_mean(s.clean[2], 0, W) / column_mean(s.beauty_clean, 0, W);
+    std::printf("  the rest's share %.4f, the sky's %.4f\n", sky_share, clean_share);
+    EXPECT_NEAR(sky_share, clean_share, 0.1 * clean_share);
+}
+
+
+TEST(LightGroups, SameResultForAnyThreadCountAndPart)
+{
+    const GroupScene s = make_scene(1.0f, 9);
+    const ImageBuf denoised = zdenoise::denoise(s.beauty, s.albedo_img);
+    std::vector<ImageBuf> one, two, part;
+    ASSERT_TRUE(zdenoise::split_light_groups(one, denoised, s.beauty, noisy_groups(s),
+                                             {}, {}, {}, {}, 1));
+    ASSERT_TRUE(zdenoise::split_light_groups(two, denoised, s.beauty, noisy_groups(s),
+                                             {}, {}, {}, {}, 2));
+    const ROI r(20, 70, 10, 33);
+    ASSERT_TRUE(zdenoise::split_light_groups(part, denoised, s.beauty, noisy_groups(s),
+                                             {}, {}, {}, r, 2));
+    for (size_t k = 0; k < 3; ++k) {
+        EXPECT_EQ(ImageBufAlgo::compare(one[k], two[k], 0.0f, 0.0f).nfail, 0u);
+        for (int y = r.ybegin; y < r.yend; ++y)
+            for (int x = r.xbegin; x < r.xend; ++x) {
+                float a[3], b[3];
+                one[k].getpixel(x, y, a, 3);
+                part[k].getpixel(x, y, b, 3);
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_EQ(a[c], b[c]) << "(" << x << "," << y << ")";
+            }
+    }
+}
+
+
+TEST(LightGroups, BadInputsAreRefusedWithAMessage)
+{
+    const GroupScene s = make_scene(0.5f, 3);
+    std::vector<ImageBuf> out;
+    EXPECT_FALSE(zdenoise::split_light_groups(out, s.beauty, s.beauty, {}));
+    EXPECT_NE(out[0].geterror().find("no light group"), std::string::npos);
+    ImageBuf small(ImageSpec(8, 8, 3, TypeFloat));
+    std::vector<ImageBuf> out2;
+    EXPECT_FALSE(zdenoise::split_light_groups(out2, s.beauty, s.beauty, { &small }));
+    EXPECT_NE(out2[0].geterror().find("light group"), std::string::npos) << out2[0].geterror();
+}
