@@ -6,7 +6,9 @@
 // shadow edge, a smooth fill and a constant sky, each denoised group is at
 // most half its noisy relMSE, the key's shadow edge stays in the key's
 // group, the groups add up to the denoised beauty, none is negative and
-// none gains energy, whatever the threads or the part computed.
+// none gains energy, whatever the threads or the part computed. The command
+// finds a Cycles render's Combined_<group> passes with no flags, splits
+// them so, whatever the strips, and --no-light-groups copies them.
 
 #include <algorithm>
 #include <cmath>
@@ -18,6 +20,8 @@
 #include <OpenImageIO/imagebufalgo.h>
 
 #include <zdenoise/light_groups.h>
+
+#include "cli_test.h"
 
 using namespace OIIO;
 
@@ -231,4 +235,114 @@ TEST(LightGroups, BadInputsAreRefusedWithAMessage)
     std::vector<ImageBuf> out2;
     EXPECT_FALSE(zdenoise::split_light_groups(out2, s.beauty, s.beauty, { &small }));
     EXPECT_NE(out2[0].geterror().find("light group"), std::string::npos) << out2[0].geterror();
+}
+
+
+namespace {
+
+const char* const kGroupNames[3] = { "key", "fill", "sky" };
+
+/// The scene as a Blender Cycles multilayer EXR with three light groups.
+void
+write_cycles_groups(const GroupScene& s, const std::string& file)
+{
+    std::vector<std::string> names;
+    auto rgb = [&](const std::string& layer) {
+        for (const char* c : { "R", "G", "B" })
+            names.push_back("ViewLayer." + layer + "." + c);
+    };
+    rgb("Combined");
+    names.push_back("ViewLayer.Combined.A");
+    for (const char* g : kGroupNames)
+        rgb(std::string("Combined_") + g);
+    rgb("Denoising Albedo");
+    ImageSpec spec(W, H, int(names.size()), TypeFloat);
+    spec.channelnames  = names;
+    spec.alpha_channel = 3;
+    ImageBuf img(spec);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            std::vector<float> px(names.size());
+            s.beauty.getpixel(x, y, &px[0], 3);
+            px[3] = 1.0f;
+            for (int k = 0; k < 3; ++k)
+                s.noisy[k].getpixel(x, y, &px[size_t(4 + 3 * k)], 3);
+            s.albedo_img.getpixel(x, y, &px[13], 3);
+            img.setpixel(x, y, px.data(), int(px.size()));
+        }
+    ASSERT_TRUE(img.write(file)) << img.geterror();
+}
+
+ImageBuf
+layer_of(const std::string& file, const std::string& layer)
+{
+    ImageBuf in(file);
+    EXPECT_TRUE(in.read(0, 0, true, TypeFloat)) << in.geterror();
+    std::vector<int> order;
+    for (const char* c : { ".R", ".G", ".B" })
+        order.push_back(in.spec().channelindex("ViewLayer." + layer + c));
+    ImageBuf out;
+    ImageBufAlgo::channels(out, in, 3, order);
+    return out;
+}
+
+class LightGroupsCli : public cli_test::CliTest {};
+
+}  // namespace
+
+
+TEST_F(LightGroupsCli, CyclesLightGroupsAreFoundDenoisedAndAddUp)
+{
+    const GroupScene s = make_scene(0.7f, 23);
+    write_cycles_groups(s, path("groups.exr"));
+    const cli_test::RunResult res
+        = run("--in " + path("groups.exr") + " -o " + path("out.exr") + " -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_NE(res.out.find("light groups fill, key, sky split from the denoised beauty"),
+              std::string::npos)
+        << res.out;
+    const ImageBuf beauty = layer_of(path("out.exr"), "Combined");
+    ImageBuf sum(ImageSpec(W, H, 3, TypeFloat));
+    for (int k = 0; k < 3; ++k) {
+        const ImageBuf g = layer_of(path("out.exr"), std::string("Combined_") + kGroupNames[k]);
+        const double before = relmse(s.noisy[k], s.clean[k]), after = relmse(g, s.clean[k]);
+        std::printf("  command: %s relMSE %.5f -> %.5f\n", kGroupNames[k], before, after);
+        EXPECT_LT(after, 0.5 * before) << kGroupNames[k];
+        ImageBufAlgo::add(sum, sum, g);
+    }
+    double worst = 0.0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            float a[3], b[3];
+            sum.getpixel(x, y, a, 3);
+            beauty.getpixel(x, y, b, 3);
+            for (int c = 0; c < 3; ++c)
+                worst = std::max(worst, double(std::fabs(a[c] - b[c]) / (std::fabs(b[c]) + 1e-6)));
+        }
+    EXPECT_LT(worst, 1e-4) << "the groups add up to the denoised beauty";
+
+    ASSERT_EQ(run("--in " + path("groups.exr") + " -o " + path("strips.exr") + " --tile 8")
+                  .status,
+              0);
+    ImageBuf whole(path("out.exr")), strips(path("strips.exr"));
+    EXPECT_EQ(ImageBufAlgo::compare(whole, strips, 0.0f, 0.0f).nfail, 0u)
+        << "strips of 8 rows give the whole frame's groups and beauty";
+
+    ASSERT_EQ(run("--in " + path("groups.exr") + " -o " + path("copied.exr")
+                  + " --no-light-groups")
+                  .status,
+              0);
+    for (const char* g : kGroupNames) {
+        const std::string layer = std::string("Combined_") + g;
+        EXPECT_EQ(ImageBufAlgo::compare(layer_of(path("copied.exr"), layer),
+                                        layer_of(path("groups.exr"), layer), 0.0f, 0.0f)
+                      .nfail,
+                  0u)
+            << "--no-light-groups copies " << layer;
+    }
+    EXPECT_EQ(ImageBufAlgo::compare(layer_of(path("copied.exr"), "Combined"), beauty, 0.0f,
+                                    0.0f)
+                  .nfail,
+              0u)
+        << "the groups do not change the beauty";
 }

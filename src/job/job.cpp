@@ -15,6 +15,8 @@
 #include <zdenoise/simd.h>
 #include <zdenoise/temporal.h>
 
+#include <functional>
+
 #include <algorithm>
 
 #include <OpenImageIO/imagebufalgo.h>
@@ -29,6 +31,7 @@
 #include "input_files.h"
 #include "layer_conventions.h"
 #include "layers_plan.h"
+#include "light_groups_plan.h"
 #include "memory_plan.h"
 #include "neighbour_frames.h"
 #include "options.h"
@@ -231,6 +234,8 @@ plan_light(const Job& j, InputFiles& files, const Convention& conv,
         p.albedo = plan_layer_colours(j, files, p.layers, result.log);
     }
     log_mode(j, conv, p, layer_args, mode_line, result.log);
+    p.groups = plan_light_groups(j, files.header(j.in.path), p.roles.radiance,
+                                 p.layered, result.log);
 }
 
 
@@ -240,7 +245,8 @@ plan_output(const Job& j, InputFiles& files, Plan& p, JobResult& result)
 {
     const InputHeader& in = files.header(j.in.path);
     ImageSpec spec;
-    layout_output(j, in, p.roles.radiance, p.layers, spec, p.output.channels,
+    layout_output(j, in, p.roles.radiance, p.layers, p.groups, spec,
+                  p.output.channels,
                   result.channel_formats);
     if (p.managed)
         colour::tag_colour_space(spec, p.spaces.output, p.spaces.input);
@@ -308,6 +314,61 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
 }
 
 
+/// The filter's run on strip `s` (of `strips`) into `denoised` (and the
+/// maps, with their statistics into `st`): over the strip's rows, and,
+/// when light groups are split, over light_groups_reach() rows above and
+/// below it too (each a run of its own, so that the statistics stay the
+/// strip's and the result is what one run over all the rows gives).
+void
+filter_strip(const Job& j, const Plan& p, int s, int strips, const Strip& strip,
+             RoleImages& img, const Guides& guides, std::vector<Layer>& layers,
+             LoadedLayers& loaded, ImageBuf& denoised, ImageBuf& maps,
+             FilterStats& st)
+{
+    FilterOptions options = j.filter;
+    options.frame         = p.noisy;
+    if (j.filter.progress)
+        options.progress = [&](float f) {
+            j.filter.progress((float(s) + f) / float(strips));
+        };
+    if (p.maps)
+        options.diagnostics = &maps;
+    const ROI wide = strip.widened(light_groups_reach(p.groups));
+    if (wide != strip.core) {
+        // One image over all the rows, which the runs below fill in parts.
+        ImageSpec spec(ROI(wide.xbegin, wide.xend, wide.ybegin, wide.yend, 0, 1, 0,
+                           img.radiance.nchannels()),
+                       TypeFloat);
+        spec.full_x      = p.noisy.xbegin;
+        spec.full_y      = p.noisy.ybegin;
+        spec.full_width  = p.noisy.width();
+        spec.full_height = p.noisy.height();
+        denoised.reset(spec);
+    }
+    auto run = [&](const ROI& roi, FilterStats* stats) {
+        return p.layered
+                   ? layered_denoise(denoised, layers,
+                                     loaded.residual.initialized() ? &loaded.residual
+                                                                   : nullptr,
+                                     guides, options, stats, roi, j.threads)
+                   : denoise(denoised, img.radiance, img.albedo,
+                             p.roles.remodulation.used ? &img.remodulation : nullptr,
+                             guides, options, stats, roi, j.threads);
+    };
+    bool ok = run(strip.core, &st);
+    options.progress    = nullptr;
+    options.diagnostics = nullptr;
+    const ROI above(wide.xbegin, wide.xend, wide.ybegin, strip.core.ybegin);
+    const ROI below(wide.xbegin, wide.xend, strip.core.yend, wide.yend);
+    for (const ROI& band : { above, below })
+        if (ok && band.height() > 0)
+            ok = run(band, nullptr);
+    if (!ok)
+        fail(format("denoising '{}' failed: {}", j.in.path,
+                    one_line(denoised.geterror())));
+}
+
+
 /// Read, denoise and write strip `s` of the plan `p`; its statistics (and
 /// each layer's) are added to `result` and `layer_stats`.
 void
@@ -330,10 +391,13 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
     const bool alpha = denoised_alpha_channel(j, roles.radiance) >= 0;
     const ImageBuf held_alpha = alpha ? strip_alpha(j, img.radiance) : ImageBuf();
     // Over what the filter reads: the strip and its halo (and with
-    // --temporal, the light test's box around it).
+    // --temporal, the light test's box around it; with light groups, the
+    // rows beyond the strip that their split reads).
     if (!p.layered)  // the layers' colours: load_layers()
         make_albedo(p.albedo, img.albedo, img.own_albedo, img.half_a_albedo,
-                    img.half_b_albedo, strip.widened(filter_halo(j.filter) + temporal_reach(j)),
+                    img.half_b_albedo,
+                    strip.widened(filter_halo(j.filter) + temporal_reach(j)
+                                  + light_groups_reach(p.groups)),
                     strip.core, j.threads, p.pooled, j.albedo.path);
     if (j.temporal > 0)
         combine_neighbours(j, p, files, strip, img, result);
@@ -354,33 +418,21 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
     result.read_seconds += strip_read();
 
     Timer denoise_timer;
-    FilterOptions options = j.filter;
-    options.frame         = p.noisy;
-    if (j.filter.progress)
-        options.progress = [&](float f) {
-            j.filter.progress((float(s) + f) / float(result.strips));
-        };
     ImageBuf denoised, maps;
-    if (p.maps)
-        options.diagnostics = &maps;
     FilterStats st;
-    const bool ok
-        = p.layered ? layered_denoise(denoised, layers,
-                                      loaded.residual.initialized()
-                                          ? &loaded.residual
-                                          : nullptr,
-                                      guides, options, &st, strip.core,
-                                      j.threads)
-                    : denoise(denoised, img.radiance, img.albedo,
-                              guide(roles.remodulation, img.remodulation),
-                              guides, options, &st, strip.core, j.threads);
-    if (!ok)
-        fail(format("denoising '{}' failed: {}", j.in.path,
-                    one_line(denoised.geterror())));
+    filter_strip(j, p, s, result.strips, strip, img, guides, layers, loaded,
+                 denoised, maps, st);
     ImageBuf denoised_alpha;
     if (alpha)
         denoise_strip_alpha(j, strip, p.noisy, held_alpha, guides,
                             denoised_alpha);
+    std::vector<ImageBuf> groups;
+    if (!p.groups.empty())
+        groups = denoise_strip_light_groups(
+            j, p.groups, strip, p.noisy, denoised, img.radiance, guides,
+            [&](ImageBuf& g) {
+                convert_role(p, g, p.spaces.input, p.spaces.working, j.in);
+            });
     result.denoise_seconds += denoise_timer();
     // Statistics summed over the strips (exact sums: they do not depend
     // on the strips).
@@ -398,6 +450,10 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
         images.push_back(&maps);  // at diagnostics_image(p.layers)
     if (alpha)
         images.push_back(&denoised_alpha);  // at alpha_image(j, p.layers)
+    for (ImageBuf& g : groups) {  // at light_group_image()
+        convert_role(p, g, p.spaces.working, p.spaces.output, j.in);
+        images.push_back(&g);
+    }
     if (!j.diagnostics_png.empty() && !p.picture.keep(maps, strip.core))
         fail(format("--diagnostics-png: {}", one_line(maps.geterror())));
     p.output.write(strip, files.rows(j.in.path), images, j.threads);

@@ -64,6 +64,9 @@ struct Job {
     /// Copy the beauty's alpha as it is (--no-alpha); by default a
     /// fractional alpha is denoised (alpha_plan.h).
     bool no_alpha = false;
+    /// Copy the light groups as they are (--no-light-groups); by default
+    /// they are split from the denoised beauty (light_groups_plan.h).
+    bool no_light_groups = false;
     /// Samples per pixel of the albedo for its prefilter
     /// (prefilter_albedo(); --albedo-samples); 0: the render's count from
     /// its metadata when the albedo is the --in file's and no --aux is

@@ -105,7 +105,7 @@ strip_cost(const Job& j, const Plan& p, InputFiles& files,
     const bool alpha = denoised_alpha_channel(j, p.roles.radiance) >= 0;
     // The residual layer's mask looks further than the filter.
     cost.around = cost.halo + p.layers.reach
-                  + p.albedo.halo();
+                  + p.albedo.halo() + light_groups_reach(p.groups);
     add_file_costs(cost, files);
     // Role images: copies when converted or not lying together in the
     // file, else the file's rows themselves (Strip::image()). The quotient
@@ -119,6 +119,11 @@ strip_cost(const Job& j, const Plan& p, InputFiles& files,
         cost.held_pixel += 4.0 + 24.0;
         cost.core_pixel += 4.0 + 12.0;
     }
+    // The light groups (split_light_groups()): each group's copy and its
+    // result, the denoised beauty over the rows around the strip.
+    const double groups = double(p.groups.names.size());
+    cost.held_pixel += groups * 12.0 + (groups > 0 ? 16.0 : 0.0);
+    cost.core_pixel += groups * 12.0;
     if (!p.layered)
         cost.held_pixel += role_bytes(files, p.roles.albedo, p.albedo_as_is);
     for (const OptionalRole* o : p.roles.optional())

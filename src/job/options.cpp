@@ -87,6 +87,7 @@ Output:
 {-o}
 {-d}
 {--no-alpha}
+{--no-light-groups}
 {--force}
 {--write-recipe}
 {--diagnostics}
@@ -212,6 +213,12 @@ options()
           "fractional (motion blur, depth of field, transparent\n"
           "film) it is denoised with the render's guides\n"
           "(docs/ALPHA.md)." },
+        { Kind::Flag, "--no-light-groups", "no-light-groups", FIELD(job.no_light_groups), "",
+          "Copy the light groups (<beauty>_<group>: Cycles'\n"
+          "Combined_<group>, Arnold's RGBA_<group>) as they are.\n"
+          "Default: each is the denoised beauty's light times its\n"
+          "share around the pixel, so that they add up to it\n"
+          "(docs/LIGHT_GROUPS.md)." },
         { Kind::Flag, "--diagnostics", "diagnostics", FIELD(job.diagnostics), "",
           "Add the filter's maps to the output: zdenoise.radius,\n"
           "zdenoise.stop (1 quality, 2 size, 3 edge, 0 not\n"

@@ -100,7 +100,8 @@ output_spec(const InputHeader& in)
 
 void
 layout_output(const Job& j, const InputHeader& in, const Selection& radiance,
-              const LayersPlan& layers, ImageSpec& spec,
+              const LayersPlan& layers, const LightGroupPlan& groups,
+              ImageSpec& spec,
               std::vector<OutputChannel>& channels,
               std::vector<TypeDesc>& formats)
 {
@@ -132,6 +133,12 @@ layout_output(const Job& j, const InputHeader& in, const Selection& radiance,
     if (alpha >= 0)
         channels[size_t(alpha)] = { -1, alpha_image(j, layers), 0,
                                     in.format(alpha) };
+    for (size_t k = 0; k < groups.channels.size(); ++k)
+        for (int c = 0; c < 3; ++c) {
+            const int i = groups.channels[k].indices[size_t(c)];
+            channels[size_t(i)] = { -1, light_group_image(j, layers, radiance, k),
+                                    c, in.format(i) };
+        }
     formats = write_formats(spec, channels, j.data_type);
 }
 
@@ -147,6 +154,15 @@ int
 alpha_image(const Job& j, const LayersPlan& layers)
 {
     return diagnostics_image(layers) + (j.diagnostics ? 1 : 0);
+}
+
+
+int
+light_group_image(const Job& j, const LayersPlan& layers,
+                  const Selection& radiance, size_t k)
+{
+    return alpha_image(j, layers)
+           + (denoised_alpha_channel(j, radiance) >= 0 ? 1 : 0) + int(k);
 }
 
 

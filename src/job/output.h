@@ -17,6 +17,7 @@
 
 #include "input_files.h"
 #include "layers_plan.h"
+#include "light_groups_plan.h"
 #include "strips.h"
 
 namespace zdenoise {
@@ -36,11 +37,13 @@ struct OutputChannel {
 /// -d says otherwise, Cryptomatte float; with --diagnostics the maps
 /// added; the alpha that job `j` denoises from the denoised alpha. Images:
 /// 0 the denoised beauty, 1 + i layer i, then the maps (diagnostics_image()),
-/// then the alpha (alpha_image()). `spec` is as an ImageBuf of the --in file's pixels has
+/// then the alpha (alpha_image()), then the light groups of `groups`
+/// (light_group_image()). `spec` is as an ImageBuf of the --in file's pixels has
 /// it (part 0's spec, the channels and metadata of every part).
 void
 layout_output(const Job& j, const InputHeader& in, const Selection& radiance,
-              const LayersPlan& layers, OIIO::ImageSpec& spec,
+              const LayersPlan& layers, const LightGroupPlan& groups,
+              OIIO::ImageSpec& spec,
               std::vector<OutputChannel>& channels,
               std::vector<OIIO::TypeDesc>& formats);
 
@@ -62,6 +65,12 @@ diagnostics_image(const LayersPlan& layers);
 /// images: after the maps.
 int
 alpha_image(const Job& j, const LayersPlan& layers);
+
+/// The index of light group k among the denoised images: after the alpha
+/// (when job `j` denoises the alpha of `radiance`).
+int
+light_group_image(const Job& j, const LayersPlan& layers,
+                  const Selection& radiance, size_t k);
 
 /// Where the output of one strip comes from and goes to.
 struct Output {

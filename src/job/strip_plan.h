@@ -20,6 +20,7 @@
 #include "input_files.h"
 #include "job_types.h"
 #include "layers_plan.h"
+#include "light_groups_plan.h"
 #include "output.h"
 #include "strips.h"
 #include "ocio/colour.h"
@@ -42,6 +43,7 @@ struct Plan {
     /// images may be the files' rows.
     bool radiance_as_is = true, albedo_as_is = true;
     LayersPlan layers;
+    LightGroupPlan groups;  ///< split from the denoised beauty
     Output output;
     int around = 0;  ///< rows a strip reads above and below its own
     /// The filter's diagnostic maps are computed (--diagnostics, or
