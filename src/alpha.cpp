@@ -79,8 +79,9 @@ coverage_as_light(const CoveragePlane& p, const ROI& frame, ImageBuf& light,
 int
 alpha_halo(const FilterOptions& options)
 {
-    // The 3x3 of a solid pixel lies within the filter's halo.
-    return std::max(filter_halo(options), 1);
+    // keep_structure() reads the filtered coverage one pixel beyond the
+    // output, which the filter computes from its own halo around that.
+    return filter_halo(options) + 1;
 }
 
 
@@ -113,19 +114,24 @@ denoise_alpha(ImageBuf& dst, const ImageBuf& alpha, const Guides& guides,
     }
     ImageBuf light, albedo, filtered;
     coverage_as_light(p, frame, light, albedo);
-    // The noise guides describe the colour; progress and the maps are
-    // the caller's whole job's, not this step's.
+    // The noise guides describe the colour. The depth of a partly covered
+    // pixel mixes the object's with the background's by the pixel's own
+    // samples, so it would keep apart pixels of the same coverage by their
+    // noise (a motion-blurred edge's alpha MSE 0.99x the rendered one with
+    // it, 0.60x without). Progress and the maps are the whole job's.
     Guides g;
     g.normal    = guides.normal;
-    g.depth     = guides.depth;
     g.object_id = guides.object_id;
     FilterOptions o = options;
     o.frame         = frame;
     o.progress      = nullptr;
     o.diagnostics   = nullptr;
     o.hat_diagonal  = nullptr;
-    if (!denoise(filtered, light, albedo, g, o, nullptr, roi, nthreads)) {
-        dst.errorfmt("{}: {}", opname, filtered.geterror());
+    ImageBuf kept;
+    if (!denoise(filtered, light, albedo, g, o, nullptr, halo_region(roi, frame, 1),
+                 nthreads)
+        || !keep_structure(kept, light, filtered, g, frame, nullptr, roi, nthreads)) {
+        dst.errorfmt("{}: {}", opname, filtered.geterror() + kept.geterror());
         return false;
     }
     if (!prepare_result(dst, dst, roi, frame, 1, opname, "dst"))
@@ -134,7 +140,7 @@ denoise_alpha(ImageBuf& dst, const ImageBuf& alpha, const Guides& guides,
     ROI r3    = roi;
     r3.chbegin = 0;
     r3.chend   = 3;
-    filtered.get_pixels(r3, TypeFloat, rgb.data());
+    kept.get_pixels(r3, TypeFloat, rgb.data());
     const size_t w = size_t(roi.width());
     for_rows(roi, nthreads, [&](int y) {
         for (int x = roi.xbegin; x < roi.xend; ++x) {

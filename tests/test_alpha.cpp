@@ -130,16 +130,25 @@ TEST(Alpha, SolidPixelsKeepTheirCoverageAndAHardSilhouetteIsExact)
 
 
 // The plain composition the operation stands for: the filter on (a, a, a)
-// over albedo 1 (no noise guides), clamped, solid pixels kept.
+// over albedo 1 (no noise or depth guide), keep_structure() against the
+// coverage, clamped, solid pixels kept.
 TEST(Alpha, IsTheFilterOnTheCoverageClampedWithSolidPixelsKept)
 {
     const ImageBuf noisy = rendered_coverage(8, 5);
-    // A variance guide must be ignored: it describes the colour.
-    ImageBuf variance(ImageSpec(W, H, 1, TypeFloat));
+    // A variance guide must be ignored (it describes the colour), and so
+    // must the depth (of a partly covered pixel: the coverage's noise).
+    ImageBuf variance(ImageSpec(W, H, 1, TypeFloat)), depth(ImageSpec(W, H, 1, TypeFloat));
     const float big = 100.0f;
     ImageBufAlgo::fill(variance, &big);
+    std::mt19937 rng(3);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const float z = 1.0f + 4.0f * std::uniform_real_distribution<float>(0, 1)(rng);
+            depth.setpixel(x, y, &z, 1);
+        }
     zdenoise::Guides g;
     g.variance         = &variance;
+    g.depth            = &depth;
     const ImageBuf out = zdenoise::denoise_alpha(noisy, g);
     ASSERT_FALSE(out.has_error()) << out.geterror();
 
@@ -152,7 +161,8 @@ TEST(Alpha, IsTheFilterOnTheCoverageClampedWithSolidPixelsKept)
             const float c[3] = { a, a, a };
             light.setpixel(x, y, c, 3);
         }
-    const ImageBuf filtered = zdenoise::denoise(light, albedo);
+    const ImageBuf filtered
+        = zdenoise::keep_structure(light, zdenoise::denoise(light, albedo));
     int solid = 0;
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {

@@ -228,8 +228,9 @@ TEST_F(StreamTest, StripsWriteTheWholeFrameFileAt1080p)
                            + " --tile 96 -v");
     ASSERT_EQ(strips.status, 0) << strips.err;
     // The halo: the filter's 2 * 16 + 6 + 2 and the selection's 44 (its
-    // choice's 10, the feature regressions' 31, the noise bound's 3).
-    EXPECT_NE(strips.out.find("12 strips of 96 rows, each read with 84 rows of halo"),
+    // choice's 10, the feature regressions' 31, the noise bound's 3), and
+    // one for the alpha's test of the filtered coverage (denoise_alpha()).
+    EXPECT_NE(strips.out.find("12 strips of 96 rows, each read with 85 rows of halo"),
               std::string::npos)
         << strips.out;
     expect_same_file(path("whole.exr"), path("strips.exr"));
@@ -256,22 +257,23 @@ TEST_F(StreamTest, StripsOfTiledFilesOffsetWindowsAndLayersAreExact)
     write_frame(path("guides.exr"), big);
     // Rows read around a strip: the filter's halo, 2 * 6 + 6 + 2 (the
     // default stride 3 reaches 2 further), the selection's 44, and in
-    // layers mode also the reach of the residual layer's mask, r_max. In
-    // path mode, one more for the direct layer's test and the direct
-    // light's routing, 3 + 2 * 8.
+    // layers mode also the reach of the residual layer's mask, r_max; one
+    // more for the alpha's test of the filtered coverage (the frame has
+    // Combined.A), and in path mode the direct layer's test, which reads
+    // the same row, and the direct light's routing, 3 + 2 * 8.
     struct Case {
         const char* name;
         std::string args;
         const char* tile;
         const char* around;
     } cases[] = {
-        { "beauty", "", "1", "64" },
+        { "beauty", "", "1", "65" },
         { "path", " --mode path", "1", "90" },
-        { "layers", " --mode layers --aovs -d float", "23", "70" },
+        { "layers", " --mode layers --aovs -d float", "23", "71" },
         // The layers' colours prefiltered: 5 rows more for the prefilter.
-        { "layers, prefiltered colours", " --mode layers --albedo-samples 4", "23", "75" },
-        { "guide file", " --normal:ch=\"Denoising Normal\" " + path("guides.exr"), "50", "64" },
-        { "today's filter", " --select 0", "1", "20" },
+        { "layers, prefiltered colours", " --mode layers --albedo-samples 4", "23", "76" },
+        { "guide file", " --normal:ch=\"Denoising Normal\" " + path("guides.exr"), "50", "65" },
+        { "today's filter", " --select 0", "1", "21" },
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.name);

@@ -15,15 +15,19 @@
 namespace zdenoise {
 
 /// The rows and columns around an output pixel that denoise_alpha() reads:
-/// filter_halo(options) (which holds the 3x3 that tells a solid pixel).
+/// filter_halo(options) + 1 (keep_structure() reads the filtered coverage
+/// one pixel beyond the output).
 ZDENOISE_API int alpha_halo(const FilterOptions& options = {});
 
 /// Denoise the coverage in channel 0 of `alpha` with the render's guides.
 ///
 /// The coverage is filtered as light of albedo 1 by denoise() (its
-/// options, without the noise guides: `variance` and the halves describe
-/// the colour, not the coverage; without progress, diagnostics or hat
-/// diagonal), and clamped to [0, 1]. A pixel whose coverage is exactly 0
+/// options, with the normal and object id guides only: `variance` and the
+/// halves describe the colour, and the depth of a partly covered pixel
+/// mixes the object's with the background's by the pixel's own samples;
+/// without progress, diagnostics or hat diagonal), given back where the
+/// filter removed more than its noise (keep_structure(): an anti-aliased
+/// edge the filter blurred), and clamped to [0, 1]. A pixel whose coverage is exactly 0
 /// or 1, and each of its 8 neighbours' too (an object's inside, empty
 /// film, a silhouette without anti-aliasing), keeps its value bit for bit:
 /// nothing there is noise. A coverage of 0 or 1 beside fractional ones is
