@@ -160,7 +160,11 @@ spread_outliers(const FilterInputs& in, const FilterOptions& opt,
     // receiver of its window (not only the output's), so that the result
     // is the same for any tile.
     std::vector<std::array<double, 3>> norm(near.size());
+    // Cancelled (opt.cancel): every remaining outlier or row returns at
+    // once, and the caller drops the spread.
     OIIO::parallel_for(int64_t(0), int64_t(near.size()), [&](int64_t k) {
+        if (cancel_requested(opt))
+            return;
         const Outlier& o = *near[size_t(k)];
         const Span sp    = span(o);
         GuideWeight guide(in, opt);
@@ -186,6 +190,8 @@ spread_outliers(const FilterInputs& in, const FilterOptions& opt,
     // The light added is smooth, and its radiance is the excess.
     const size_t out_w = size_t(out.width());
     OIIO::parallel_for(int64_t(out.ybegin), int64_t(out.yend), [&](int64_t yy) {
+        if (cancel_requested(opt))
+            return;
         const int y = int(yy);
         GuideWeight guide(in, opt);
         std::vector<float> g(size_t(2 * R + 1) + kLanes);
