@@ -132,12 +132,14 @@ feature_candidates_halo()
 /// sees the step) and can exceed the truth there many times, which makes
 /// SURE prefer any smoother filter and the pilot's patch weights accept
 /// the step: the bound holds both. `out_l` and `d0` cover `k0reg` (pil and
-/// the box), and so does `in`. Returns 0 where `s` is 0 (no observation).
+/// the box), and so does `in`. Returns 0 where `s` is 0 (no observation);
+/// no result once `cancel` is set (the remaining rows are skipped).
 std::vector<float>
 residual_bounded_variance(const FilterInputs& in, const ROI& pil,
                           const ROI& k0reg, const std::vector<float>& out_l,
                           const std::vector<float>& d0,
-                          const std::vector<float>& s, int nthreads)
+                          const std::vector<float>& s, int nthreads,
+                          const std::atomic<bool>* cancel)
 {
     const int kw = k0reg.width();
     auto at      = [&](int x, int y) {
@@ -146,6 +148,8 @@ residual_bounded_variance(const FilterInputs& in, const ROI& pil,
     // Each pixel's term (z_l - out_l)^2 / (1 - 2 D), NaN where it has none.
     std::vector<float> term(k0reg.npixels(), NAN);
     for_rows(k0reg, nthreads, [&](int y) {
+        if (cancel_requested(cancel))
+            return;
         for (int x = k0reg.xbegin; x < k0reg.xend; ++x) {
             const size_t i = in.index(x, y), k = at(x, y);
             if (!(in.cls[i] & kFitPoint) || !(d0[k] < 0.5f))
@@ -158,6 +162,8 @@ residual_bounded_variance(const FilterInputs& in, const ROI& pil,
     });
     std::vector<float> sigma2(pil.npixels(), 0.0f);
     for_rows(pil, nthreads, [&](int y) {
+        if (cancel_requested(cancel))
+            return;
         for (int x = pil.xbegin; x < pil.xend; ++x) {
             const size_t j = size_t(y - pil.ybegin) * size_t(pil.width())
                              + size_t(x - pil.xbegin);
@@ -427,12 +433,13 @@ run_candidate0(Selection& S, FilterStats& totals, Candidate0& c0)
         return false;
     read_fit_points(S, in, k0spread, c0);
     radiance_bounds(in, S.sel, S.base.r_max, c0.bound_lo, c0.bound_hi,
-                    c0.bound_ia, S.nthreads);
+                    c0.bound_ia, S.nthreads, S.options.cancel);
     if (cancel_requested(S.options))
         return false;
     if (!S.halves)
         c0.sigma2 = residual_bounded_variance(in, S.pil, S.k0reg, c0.o0_l,
-                                              c0.d0_k0, c0.s, S.nthreads);
+                                              c0.d0_k0, c0.s, S.nthreads,
+                                              S.options.cancel);
     return true;
 }
 
