@@ -91,6 +91,8 @@ decode_filter_inputs(FilterInputs& in, ImageBuf& dst, const ImageBuf& quotient,
         return false;
     // Cancelled (FilterOptions::cancel): false between stages, with no
     // message (the operation gives it).
+    if (cancel_requested(opt))
+        return false;
     classify_pixels(in, z, alb, alpha, depth, opt.albedo_eps, nthreads);
     const RawVariance var = raw_variance(in, guides, alb, opt.albedo_eps,
                                          nthreads);

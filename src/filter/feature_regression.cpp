@@ -425,6 +425,8 @@ feature_regression(ImageBuf& dst, const ImageBuf& quotient,
 
     const Points p = decode_points(quotient, albedo, pilot, guides, region,
                                    o.albedo_eps, o.patch_radius);
+    if (detail::cancel_requested(o.cancel))
+        return detail::cancelled(dst, dst_was_given, roi, nthreads);
     const FeaturePlanes planes = p.planes();
     // Windows clip at the frame, whose part held here is the region
     // (window_extent()).

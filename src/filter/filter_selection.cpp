@@ -332,6 +332,8 @@ select_by_risk(ImageBuf& dst, const std::vector<const ImageBuf*>& candidates,
     std::vector<std::vector<double>> alpha(static_cast<size_t>(K));
     for (int k = 0; k < K; ++k)
         alpha[size_t(k)] = blend_weight(choice, k, w, h, o.map_radius, nthreads);
+    if (detail::cancel_requested(o.cancel))
+        return detail::cancelled(dst, dst_was_given, roi, nthreads);
     return blend_candidates(dst, weights, candidates, alpha, roi, region,
                             nthreads);
 }

@@ -55,6 +55,10 @@ split_outliers(FilterInputs& in, std::vector<float>& z,
     // neighbours' original values), then cap.
     std::vector<float> cap(r.npixels(), 0.0f);
     for_rows(r, nthreads, [&](int y) {
+        // Cancelled: the rows left are skipped (decode_filter_inputs()
+        // then drops the result).
+        if (cancel_requested(opt))
+            return;
         float level[25], spread[25];
         for (int x = r.xbegin; x < r.xend; ++x) {
             const size_t i = in.index(x, y);
