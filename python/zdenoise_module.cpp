@@ -42,6 +42,8 @@
 #include "job/recipe.h"
 #include "job/validate.h"
 
+#include "cancel.h"
+
 namespace py  = pybind11;
 namespace job = zdenoise::job;
 using json    = nlohmann::json;
@@ -76,6 +78,20 @@ std::string
 message(const std::string& text)
 {
     return python_text(text).cast<std::string>();
+}
+
+
+using zdenoise_python::Cancel;
+
+/// The error of a failed call: Cancelled when its Cancel was set, else
+/// `other` (ValueError or zdenoise.Error) with the library's message.
+template<class Other>
+[[noreturn]] void
+raise_failure(const Cancel* cancel, const std::string& error)
+{
+    if (cancel && cancel->flag.load())
+        throw zdenoise_python::CancelledError(message(error));
+    throw Other(message(error));
 }
 
 
@@ -306,6 +322,7 @@ struct ArrayCall {
     /// The guides that were given.
     std::optional<FloatArray> normal, depth, ids, variance, half_a, half_b;
     job::Command command;
+    const Cancel* cancel = nullptr;
 };
 
 
@@ -400,6 +417,7 @@ run_array_call(const ArrayCall& call)
     const bool want_maps = call.command.job.diagnostics;
     OIIO::ImageBuf maps_image;
     zdenoise::FilterOptions filter = call.command.job.filter;
+    filter.cancel = call.cancel ? &call.cancel->flag : nullptr;
     if (want_maps)
         filter.diagnostics = &maps_image;
     bool ok = false;
@@ -408,8 +426,8 @@ run_array_call(const ArrayCall& call)
         const job::Job& j = call.command.job;
         OIIO::ImageBuf clean;
         ok = j.albedo_samples == 0
-             || zdenoise::prefilter_albedo(clean, albedo, j.albedo_samples,
-                                           {}, j.threads);
+             || zdenoise_python::prefilter_albedo_in_bands(
+                 clean, albedo, j.albedo_samples, j.threads, filter.cancel);
         if (!ok)
             dst.errorfmt("{}", clean.geterror());
         ok = ok
@@ -418,7 +436,7 @@ run_array_call(const ArrayCall& call)
                                   filter, nullptr, {}, j.threads);
     }
     if (!ok)
-        throw py::value_error(message(job::one_line(dst.geterror())));
+        raise_failure<py::value_error>(call.cancel, job::one_line(dst.geterror()));
     if (!want_maps)
         return std::move(result);
     py::array_t<float> maps(std::vector<py::ssize_t> { shape[0], shape[1], 4 });
@@ -433,10 +451,12 @@ run_array_call(const ArrayCall& call)
 py::object
 denoise(py::object radiance, py::object albedo, py::object normal,
         py::object depth, py::object ids, py::object variance,
-        py::object halves, py::kwargs options)
+        py::object halves, const Cancel* cancel, py::kwargs options)
 {
-    return run_array_call(read_array_call(radiance, albedo, normal, depth,
-                                          ids, variance, halves, options));
+    ArrayCall call = read_array_call(radiance, albedo, normal, depth, ids,
+                                     variance, halves, options);
+    call.cancel = cancel;
+    return run_array_call(call);
 }
 
 
@@ -502,7 +522,7 @@ file_option(const job::Option& o)
 
 py::dict
 denoise_file(py::object input, py::object output, bool force,
-             py::kwargs options)
+             const Cancel* cancel, py::kwargs options)
 {
     job::Command command;
     set_options(keywords_json(options), file_option, command);
@@ -533,6 +553,7 @@ denoise_file(py::object input, py::object output, bool force,
         command.job, out, force, job::Spelling::Keyword);
     if (!refused.empty())
         throw JobError(message(refused));
+    command.job.filter.cancel = cancel ? &cancel->flag : nullptr;
     job::JobResult result;
     std::string error;
     bool ok = false;
@@ -542,7 +563,7 @@ denoise_file(py::object input, py::object output, bool force,
         ok = job::run_job_to_file(command.job, out, result, error);
     }
     if (!ok)
-        throw JobError(message(error));
+        raise_failure<JobError>(cancel, error);
     return result_dict(result);
 }
 
@@ -585,6 +606,9 @@ render's AOV of N samples a pixel, prefiltered first (docs/FILTER.md
 section 12). diagnostics=True: return (denoised, maps), maps H x W x 4:
 radius, stop, noise, error (docs/DIAGNOSTICS.md).
 
+cancel=zdenoise.Cancel(): its cancel(), from another thread, stops the
+call, which raises zdenoise.Cancelled.
+
 A wrong shape, dtype or option raises ValueError naming the argument.
 The filter runs with the GIL released.)";
 
@@ -610,7 +634,9 @@ one line each).
 
 A wrong option raises ValueError; a job that fails (a missing file or
 channel, an output that is an input) raises zdenoise.Error with the
-command's one-line message. The job runs with the GIL released.)";
+command's one-line message; cancel=zdenoise.Cancel(), set from another
+thread, stops it (zdenoise.Cancelled, no output written). The job runs
+with the GIL released.)";
 
 /// `doc` with its "{}" replaced by the keyword names of the options
 /// `accepts` takes, from the table (so the help cannot forget one), in
@@ -652,10 +678,13 @@ PYBIND11_MODULE(zdenoise, m)
     py::register_exception<JobError>(m, "Error", PyExc_RuntimeError);
     m.attr("Error").attr("__doc__")
         = "A zdenoise job failed; the message is the command's one line.";
+    zdenoise_python::add_cancel(m, m.attr("Error"));
     m.def("denoise", &denoise, py::arg("radiance"), py::arg("albedo"),
           py::arg("normal") = py::none(), py::arg("depth") = py::none(),
           py::arg("ids") = py::none(), py::arg("variance") = py::none(),
-          py::arg("halves") = py::none(), denoise_doc.c_str());
+          py::arg("halves") = py::none(), py::kw_only(),
+          py::arg("cancel") = py::none(), denoise_doc.c_str());
     m.def("denoise_file", &denoise_file, py::arg("input"), py::arg("output"),
-          py::kw_only(), py::arg("force") = false, denoise_file_doc.c_str());
+          py::kw_only(), py::arg("force") = false,
+          py::arg("cancel") = py::none(), denoise_file_doc.c_str());
 }

@@ -8,6 +8,7 @@
 
 #include <zdenoise/zdenoise.h>
 
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imagebufalgo_util.h>
 
 namespace zdenoise {
@@ -157,6 +158,23 @@ prepare_diagnostics(ImageBuf& dst, ImageBuf& maps, const ROI& roi,
     const std::vector<std::string>& names = diagnostic_channels();
     return prepare_result(dst, maps, roi, frame, int(names.size()), opname,
                           "the diagnostics image", &names);
+}
+
+bool
+cancelled(ImageBuf& dst, bool dst_was_given, ROI roi, int nthreads)
+{
+    dst.geterror();  // clears it
+    if (!dst_was_given) {
+        dst.reset();
+    } else if (dst.initialized()) {
+        roi = roi.defined() ? OIIO::roi_intersection(roi, dst.roi())
+                            : dst.roi();
+        roi.chbegin = 0;
+        roi.chend   = dst.nchannels();
+        OIIO::ImageBufAlgo::zero(dst, roi, nthreads);
+    }
+    dst.errorfmt("zdenoise: cancelled");
+    return false;
 }
 
 }  // namespace detail

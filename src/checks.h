@@ -60,5 +60,13 @@ bool
 prepare_diagnostics(ImageBuf& dst, ImageBuf& maps, const ROI& roi,
                     const ROI& frame, const char* opname);
 
+/// End an operation that saw its cancel flag set (FilterOptions::cancel):
+/// what a stage left in dst's error is dropped for "zdenoise: cancelled",
+/// and dst holds no result: reset when the call allocated it
+/// (`dst_was_given` false), else the pixels of roi (undefined: all), every
+/// channel, set to 0. Returns false.
+bool
+cancelled(ImageBuf& dst, bool dst_was_given, ROI roi, int nthreads);
+
 }  // namespace detail
 }  // namespace zdenoise

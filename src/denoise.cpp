@@ -18,6 +18,9 @@ detail::denoise_through(ImageBuf& dst, const ImageBuf& radiance,
                         int extra_halo, const QuotientFilter& filter)
 {
     const char* opname = "denoise";
+    const bool dst_was_given = dst.initialized();
+    if (detail::cancel_requested(options))
+        return detail::cancelled(dst, dst_was_given, roi, nthreads);
     if (!detail::prepare_dst(dst, radiance, roi, opname)
         || !detail::check_input(dst, radiance, opname, "radiance", roi, 3))
         return false;
@@ -44,6 +47,8 @@ detail::denoise_through(ImageBuf& dst, const ImageBuf& radiance,
         return false;
     }
     if (!filter(filtered, quotient, opt)) {
+        if (detail::cancel_requested(options))
+            return detail::cancelled(dst, dst_was_given, roi, nthreads);
         dst.errorfmt("{}", filtered.geterror());
         return false;
     }

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -55,6 +56,21 @@ for_ranges(size_t n, int nthreads, F&& body)
                                  body(size_t(b), size_t(e));
                              },
                              paropt_any_length(nthreads));
+}
+
+/// Has the caller asked the running operation to stop
+/// (FilterOptions::cancel)? A relaxed load: the flag orders no data, it
+/// only ends loops early, and costs nothing beside a block or a row.
+inline bool
+cancel_requested(const std::atomic<bool>* cancel)
+{
+    return cancel && cancel->load(std::memory_order_relaxed);
+}
+
+inline bool
+cancel_requested(const FilterOptions& options)
+{
+    return cancel_requested(options.cancel);
 }
 
 /// Rec.709 luminance weights: the scalar view of an RGB quotient.

@@ -179,6 +179,29 @@ denoise_layer(ImageBuf& dst, const Layer& layer, const Guides& shared,
 }
 
 
+/// Every layer has its radiance and albedo, holding `need`.
+bool
+check_layers(ImageBuf& dst, const std::vector<Layer>& layers, const ROI& need,
+             const char* opname)
+{
+    for (const Layer& layer : layers) {
+        const std::string radiance = "layer '" + layer.name + "' radiance";
+        const std::string albedo   = "layer '" + layer.name + "' albedo";
+        if (!layer.radiance || !layer.albedo) {
+            dst.errorfmt("{}: layer '{}' has no {} image", opname, layer.name,
+                         layer.radiance ? "albedo" : "radiance");
+            return false;
+        }
+        if (!detail::check_input(dst, *layer.radiance, opname,
+                                 radiance.c_str(), need, 3)
+            || !detail::check_input(dst, *layer.albedo, opname,
+                                    albedo.c_str(), need, 3))
+            return false;
+    }
+    return true;
+}
+
+
 /// The diagnostics of a layered denoise (FilterOptions::diagnostics): each
 /// filtered layer's maps combined with weight w = its light (luminance of
 /// its contribution, at least 1e-20 so that layers without light still
@@ -258,6 +281,9 @@ layered_denoise(ImageBuf& dst, const std::vector<Layer>& layers,
                 int nthreads)
 {
     const char* opname = "layered_denoise";
+    const bool dst_was_given = dst.initialized();
+    if (detail::cancel_requested(options))
+        return detail::cancelled(dst, dst_was_given, roi, nthreads);
     if (layers.empty() || !layers[0].radiance
         || !layers[0].radiance->initialized()) {
         dst.errorfmt("{}: no layers (the first layer needs a radiance "
@@ -289,20 +315,8 @@ layered_denoise(ImageBuf& dst, const std::vector<Layer>& layers,
                    : image;
     need.chbegin = 0;
     need.chend   = 3;
-    for (const Layer& layer : layers) {
-        const std::string radiance = "layer '" + layer.name + "' radiance";
-        const std::string albedo   = "layer '" + layer.name + "' albedo";
-        if (!layer.radiance || !layer.albedo) {
-            dst.errorfmt("{}: layer '{}' has no {} image", opname, layer.name,
-                         layer.radiance ? "albedo" : "radiance");
-            return false;
-        }
-        if (!detail::check_input(dst, *layer.radiance, opname,
-                                 radiance.c_str(), need, 3)
-            || !detail::check_input(dst, *layer.albedo, opname,
-                                    albedo.c_str(), need, 3))
-            return false;
-    }
+    if (!check_layers(dst, layers, need, opname))
+        return false;
     if (residual
         && !detail::check_input(dst, *residual, opname, "residual", roi, 3))
         return false;
@@ -337,8 +351,14 @@ layered_denoise(ImageBuf& dst, const std::vector<Layer>& layers,
                                       ? &layer_maps
                                       : nullptr;
         layer_opt.hat_diagonal  = nullptr;  // one per layer: not combined
-        if (!denoise_layer(dst, layer, guides, layer_opt, &layer_stats, roi,
-                           nthreads, out, contribution))
+        // Each layer's filter stops within when cancelled; the rest of the
+        // layers are not begun.
+        const bool layer_done = denoise_layer(dst, layer, guides, layer_opt,
+                                              &layer_stats, roi, nthreads, out,
+                                              contribution);
+        if (detail::cancel_requested(options))
+            return detail::cancelled(dst, dst_was_given, roi, nthreads);
+        if (!layer_done)
             return false;
         if (layer_opt.diagnostics
             && !combined.add(layer_maps, *contribution)) {

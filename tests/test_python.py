@@ -468,6 +468,61 @@ class Files(unittest.TestCase):
         self.assertEqual(self.files(), ["shot.exr"])
 
 
+class Cancelling(unittest.TestCase):
+    """zdenoise.Cancel: set from another thread, the running call stops and
+    raises zdenoise.Cancelled; given and never set, it changes nothing."""
+
+    def setUp(self):
+        self.noisy, self.albedo, _ = textured_scene(192, 256)
+
+    def test_a_cancel_never_set_changes_nothing(self):
+        flag = zdenoise.Cancel()
+        self.assertFalse(flag.cancelled)
+        self.assertTrue(np.array_equal(
+            zdenoise.denoise(self.noisy, self.albedo, cancel=flag),
+            zdenoise.denoise(self.noisy, self.albedo)))
+
+    def test_a_cancel_set_before_the_call_raises_cancelled(self):
+        flag = zdenoise.Cancel()
+        flag.cancel()
+        self.assertTrue(flag.cancelled)
+        with self.assertRaises(zdenoise.Cancelled) as caught:
+            zdenoise.denoise(self.noisy, self.albedo, cancel=flag)
+        self.assertEqual(str(caught.exception), "zdenoise: cancelled")
+        self.assertTrue(issubclass(zdenoise.Cancelled, zdenoise.Error))
+
+    def test_another_thread_stops_a_running_denoise(self):
+        flag = zdenoise.Cancel()
+        started = threading.Event()
+        outcome = {}
+
+        def work():
+            started.set()
+            try:
+                outcome["result"] = zdenoise.denoise(self.noisy, self.albedo,
+                                                     stride=1, cancel=flag)
+            except zdenoise.Cancelled as error:
+                outcome["error"] = str(error)
+
+        worker = threading.Thread(target=work)
+        worker.start()
+        started.wait()
+        flag.cancel()  # while the worker runs (or is about to: the same)
+        worker.join()
+        self.assertNotIn("result", outcome, "no image is returned")
+        self.assertEqual(outcome.get("error"), "zdenoise: cancelled")
+
+    def test_a_cancelled_file_job_writes_no_file(self):
+        with tempfile.TemporaryDirectory() as folder:
+            out = os.path.join(folder, "out.exr")
+            flag = zdenoise.Cancel()
+            flag.cancel()
+            with self.assertRaises(zdenoise.Cancelled) as caught:
+                zdenoise.denoise_file(SAMPLE, out, cancel=flag)
+            self.assertIn("cancelled", str(caught.exception))
+            self.assertEqual(os.listdir(folder), [])
+
+
 class Module(unittest.TestCase):
     def test_version_and_docstrings(self):
         r = subprocess.run([CLI, "--version"], capture_output=True, text=True,

@@ -12,6 +12,7 @@
 
 #pragma once
 
+#include <atomic>
 #include <vector>
 
 #include <zdenoise/zdenoise.h>
@@ -39,6 +40,10 @@ struct FeatureRegressionOptions {
     /// The data window of the whole image (as FilterOptions::frame);
     /// undefined: the quotient's data window.
     ROI frame;
+    /// As FilterOptions::cancel: set, the call stops within a row of
+    /// windows and returns false with "zdenoise: cancelled", dst holding
+    /// no result. Not a filter parameter: it never changes the result.
+    const std::atomic<bool>* cancel = nullptr;
 };
 
 /// The first-order feature regression of the quotient (docs/FILTER.md
@@ -133,6 +138,8 @@ struct SelectionOptions {
     /// The data window of the whole image; undefined: the first
     /// candidate's data window.
     ROI frame;
+    /// As FeatureRegressionOptions::cancel (polled per candidate).
+    const std::atomic<bool>* cancel = nullptr;
 };
 
 /// The per-pixel choice among candidate filters by their estimated risk

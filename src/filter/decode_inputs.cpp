@@ -89,14 +89,22 @@ decode_filter_inputs(FilterInputs& in, ImageBuf& dst, const ImageBuf& quotient,
         decode_normals(in, *guides.normal);
     if (guides.object_id && !decode_object_ids(in, dst, *guides.object_id))
         return false;
+    // Cancelled (FilterOptions::cancel): false between stages, with no
+    // message (the operation gives it).
+    if (cancel_requested(opt))
+        return false;
     classify_pixels(in, z, alb, alpha, depth, opt.albedo_eps, nthreads);
     const RawVariance var = raw_variance(in, guides, alb, opt.albedo_eps,
                                          nthreads);
+    if (cancel_requested(opt))
+        return false;
     if (opt.outlier_spread)
         in.outliers = split_outliers(in, z, alb, var, opt, nthreads);
     smooth_noise(in, var, nthreads);
+    if (cancel_requested(opt))
+        return false;
     prepare_fit_planes(in, z, alb, opt.albedo_eps, opt.sigma_good, nthreads);
-    return true;
+    return !cancel_requested(opt);
 }
 
 }  // namespace detail

@@ -13,7 +13,8 @@ namespace detail {
 
 /// Decode the quotient, albedo and guides over `region` and estimate the
 /// noise (docs/FILTER.md sections 2-3). Guides must have been checked to
-/// cover the region. Returns false (message in dst) on bad guide shapes.
+/// cover the region. Returns false (message in dst) on bad guide shapes,
+/// and (no message) when opt.cancel is set.
 bool
 decode_filter_inputs(FilterInputs& in, ImageBuf& dst, const ImageBuf& quotient,
                      const ImageBuf& albedo, const Guides& guides,

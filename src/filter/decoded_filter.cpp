@@ -57,9 +57,9 @@ struct Splats {
 
 /// Fit and splat every centre the output pixels `roi` depend on (sections
 /// 5, 6 and 8): the blocks of one phase in parallel, the phases in order,
-/// so that every pixel receives its contributions in one fixed order.
-/// Returns the statistics of the windows centred in `counted`, summed in
-/// block order.
+/// so that every pixel receives its contributions in one fixed order; none
+/// once opt.cancel is set (the splats are then no result). Returns the
+/// statistics of the windows centred in `counted`, summed in block order.
 FilterStats
 fit_centres(const FilterInputs& in, const FilterOptions& opt, const ROI& roi,
             const ROI& counted, int nthreads, Splats& splats)
@@ -76,6 +76,9 @@ fit_centres(const FilterInputs& in, const FilterOptions& opt, const ROI& roi,
     std::atomic<int64_t> blocks_done { 0 };
     std::mutex progress_mutex;
     auto run_block = [&](int b) {
+        // Cancelled: every remaining block returns at once, on every thread.
+        if (cancel_requested(opt))
+            return;
         WindowFitter fitter(in, opt, roi, splats.acc, splats.wsum,
                             opt.diagnostics ? &splats.diagnostics : nullptr,
                             splats.hat.empty() ? nullptr : &splats.hat,
@@ -244,7 +247,11 @@ detail::filter_decoded(ImageBuf& dst, const ImageBuf& quotient,
     Splats splats(size_t(roi.width()) * size_t(roi.height()),
                   opt.diagnostics != nullptr, hat != nullptr);
     FilterStats tile = fit_centres(in, opt, roi, counted, nthreads, splats);
+    if (cancel_requested(opt))
+        return false;
     spread_outliers(in, opt, roi, splats.spread, nthreads);
+    if (cancel_requested(opt))
+        return false;
     if (!normalise_output(dst, quotient, in, opt, splats, roi, counted, nthreads,
                           tile))
         return false;

@@ -24,6 +24,7 @@ struct FilterInputs;
 /// diagonal, opt.diagnostics the maps, `spread_light` (or null) the
 /// outliers' spread light over roi (3 doubles a pixel, spread_outliers()).
 /// Adds the statistics of the windows and pixels in `counted` to totals.
+/// Returns false with no message, dst not written, when opt.cancel is set.
 bool filter_decoded(ImageBuf& dst, const ImageBuf& quotient,
                     const FilterInputs& in, const FilterOptions& opt, ROI roi,
                     const ROI& counted, int nthreads, FilterStats& totals,

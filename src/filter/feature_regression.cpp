@@ -376,6 +376,9 @@ feature_regression(ImageBuf& dst, const ImageBuf& quotient,
                    int nthreads)
 {
     const char* opname = "feature_regression";
+    const bool dst_was_given = dst.initialized();
+    if (detail::cancel_requested(options.cancel))
+        return detail::cancelled(dst, dst_was_given, roi, nthreads);
     FeatureRegressionOptions o = options;
     if (!o.frame.defined())
         o.frame = quotient.roi();
@@ -422,6 +425,8 @@ feature_regression(ImageBuf& dst, const ImageBuf& quotient,
 
     const Points p = decode_points(quotient, albedo, pilot, guides, region,
                                    o.albedo_eps, o.patch_radius);
+    if (detail::cancel_requested(o.cancel))
+        return detail::cancelled(dst, dst_was_given, roi, nthreads);
     const FeaturePlanes planes = p.planes();
     // Windows clip at the frame, whose part held here is the region
     // (window_extent()).
@@ -448,6 +453,9 @@ feature_regression(ImageBuf& dst, const ImageBuf& quotient,
             if (((y - o.frame.ybegin) / s) % phases == phase)
                 rows.push_back(y);
         parallel_for(int64_t(0), int64_t(rows.size()), [&](int64_t k) {
+            // Cancelled: every remaining row returns at once.
+            if (detail::cancel_requested(o.cancel))
+                return;
             const int y0 = rows[size_t(k)];
             WindowScratch scratch(r);
             CentrePatch patch;
@@ -455,6 +463,8 @@ feature_regression(ImageBuf& dst, const ImageBuf& quotient,
                 fit_and_splat(p, planes, o, roi, x0, y0, scratch, patch, sums);
         }, detail::paropt_any_length(nthreads));
     }
+    if (detail::cancel_requested(o.cancel))
+        return detail::cancelled(dst, dst_was_given, roi, nthreads);
     const size_t nout = roi.npixels();
     std::vector<float> out(4 * nout);
     for (int y = roi.ybegin; y < roi.yend; ++y)

@@ -144,6 +144,8 @@ choose_by_risk(const std::vector<const ImageBuf*>& risks, const ROI& region,
     std::vector<int> choice(n, 0);
     std::vector<double> best(n, 0.0);
     for (int k = 1; k < K; ++k) {
+        if (detail::cancel_requested(o.cancel))
+            break;  // select_by_risk() then reports it
         std::vector<double> d(n, 0.0), d2(n, 0.0), m(n, 0.0);
         detail::for_ranges(n, nthreads, [&](size_t ib, size_t ie) {
             for (size_t i = ib; i < ie; ++i) {
@@ -318,15 +320,20 @@ select_by_risk(ImageBuf& dst, const std::vector<const ImageBuf*>& candidates,
                int nthreads)
 {
     SelectionOptions o = options;
+    const bool dst_was_given = dst.initialized();
     if (!check_selection(dst, candidates, risks, o, weights, roi))
         return false;
     const int K      = int(candidates.size());
     const ROI region = detail::halo_region(roi, o.frame, selection_halo(o));
     const int w = region.width(), h = region.height();
     const std::vector<int> choice = choose_by_risk(risks, region, o, nthreads);
+    if (detail::cancel_requested(o.cancel))
+        return detail::cancelled(dst, dst_was_given, roi, nthreads);
     std::vector<std::vector<double>> alpha(static_cast<size_t>(K));
     for (int k = 0; k < K; ++k)
         alpha[size_t(k)] = blend_weight(choice, k, w, h, o.map_radius, nthreads);
+    if (detail::cancel_requested(o.cancel))
+        return detail::cancelled(dst, dst_was_given, roi, nthreads);
     return blend_candidates(dst, weights, candidates, alpha, roi, region,
                             nthreads);
 }

@@ -55,6 +55,10 @@ split_outliers(FilterInputs& in, std::vector<float>& z,
     // neighbours' original values), then cap.
     std::vector<float> cap(r.npixels(), 0.0f);
     for_rows(r, nthreads, [&](int y) {
+        // Cancelled: the rows left are skipped (decode_filter_inputs()
+        // then drops the result).
+        if (cancel_requested(opt))
+            return;
         float level[25], spread[25];
         for (int x = r.xbegin; x < r.xend; ++x) {
             const size_t i = in.index(x, y);
@@ -160,7 +164,11 @@ spread_outliers(const FilterInputs& in, const FilterOptions& opt,
     // receiver of its window (not only the output's), so that the result
     // is the same for any tile.
     std::vector<std::array<double, 3>> norm(near.size());
+    // Cancelled (opt.cancel): every remaining outlier or row returns at
+    // once, and the caller drops the spread.
     OIIO::parallel_for(int64_t(0), int64_t(near.size()), [&](int64_t k) {
+        if (cancel_requested(opt))
+            return;
         const Outlier& o = *near[size_t(k)];
         const Span sp    = span(o);
         GuideWeight guide(in, opt);
@@ -186,6 +194,8 @@ spread_outliers(const FilterInputs& in, const FilterOptions& opt,
     // The light added is smooth, and its radiance is the excess.
     const size_t out_w = size_t(out.width());
     OIIO::parallel_for(int64_t(out.ybegin), int64_t(out.yend), [&](int64_t yy) {
+        if (cancel_requested(opt))
+            return;
         const int y = int(yy);
         GuideWeight guide(in, opt);
         std::vector<float> g(size_t(2 * R + 1) + kLanes);

@@ -56,7 +56,8 @@ struct SlidingExtrema {
 void
 radiance_bounds(const FilterInputs& in, const ROI& out, int r_max,
                 std::vector<float>& lo, std::vector<float>& hi,
-                std::vector<float>& inv_albedo, int nthreads)
+                std::vector<float>& inv_albedo, int nthreads,
+                const std::atomic<bool>* cancel)
 {
     const float inf = std::numeric_limits<float>::infinity();
     const ROI rows(out.xbegin, out.xend, std::max(out.ybegin - r_max, in.region.ybegin),
@@ -67,6 +68,8 @@ radiance_bounds(const FilterInputs& in, const ROI& out, int r_max,
     // of w, then over the columns of those.
     std::vector<float> rlo(3 * w * size_t(rows.height())), rhi(rlo.size());
     for_rows(rows, nthreads, [&](int y) {
+        if (cancel_requested(cancel))
+            return;
         const size_t nrow = size_t(rw);
         std::vector<float> vlo(nrow), vhi(nrow), elo(nrow), ehi(nrow);
         SlidingExtrema ext;
@@ -88,6 +91,8 @@ radiance_bounds(const FilterInputs& in, const ROI& out, int r_max,
     inv_albedo.assign(3 * n, 0.0f);
     const int rh = rows.height();
     parallel_for(int64_t(0), int64_t(3 * w), [&](int64_t col) {
+        if (cancel_requested(cancel))
+            return;
         const size_t c = size_t(col) / w, x = size_t(col) % w;
         const size_t ncol = size_t(rh);
         std::vector<float> elo(ncol), ehi(ncol);

@@ -7,6 +7,7 @@
 
 #pragma once
 
+#include <atomic>
 #include <vector>
 
 #include "filter_inputs.h"
@@ -21,11 +22,14 @@ namespace detail {
 /// pixel's 1 / (La + albedo_eps) (0 where not demodulated). A window of
 /// the wider feature regression reaches 2 x 15 pixels, and its linear model
 /// in the normal extrapolates across facets: without these bounds it put
-/// light 1.2x brighter than any within 16 pixels on zigzag_steps.
+/// light 1.2x brighter than any within 16 pixels on zigzag_steps. Once
+/// `cancel` is set (FilterOptions::cancel) the remaining rows and columns
+/// are skipped: the bounds are then no result.
 void
 radiance_bounds(const FilterInputs& in, const ROI& out, int r_max,
                 std::vector<float>& lo, std::vector<float>& hi,
-                std::vector<float>& inv_albedo, int nthreads);
+                std::vector<float>& inv_albedo, int nthreads,
+                const std::atomic<bool>* cancel);
 
 }  // namespace detail
 }  // namespace zdenoise

@@ -141,6 +141,9 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                   int nthreads)
 {
     const char* opname = "regression_filter";
+    const bool dst_was_given = dst.initialized();
+    if (cancel_requested(options))
+        return cancelled(dst, dst_was_given, roi, nthreads);
     if (!prepare_dst(dst, quotient, roi, opname)
         || !check_input(dst, quotient, opname, "quotient", roi, 3)
         || !check_options(dst, options))
@@ -202,6 +205,9 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                                                        tile_opt, tile, nthreads, totals)
                   : filter_tile(dst, quotient, albedo, guides, tile_opt, tile,
                                 nthreads, totals, hat);
+        // A stage that saw the flag stops with no message of its own.
+        if (cancel_requested(options))
+            return cancelled(dst, dst_was_given, roi, nthreads);
         if (!done)
             return false;
     }

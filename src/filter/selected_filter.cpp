@@ -132,12 +132,14 @@ feature_candidates_halo()
 /// sees the step) and can exceed the truth there many times, which makes
 /// SURE prefer any smoother filter and the pilot's patch weights accept
 /// the step: the bound holds both. `out_l` and `d0` cover `k0reg` (pil and
-/// the box), and so does `in`. Returns 0 where `s` is 0 (no observation).
+/// the box), and so does `in`. Returns 0 where `s` is 0 (no observation);
+/// no result once `cancel` is set (the remaining rows are skipped).
 std::vector<float>
 residual_bounded_variance(const FilterInputs& in, const ROI& pil,
                           const ROI& k0reg, const std::vector<float>& out_l,
                           const std::vector<float>& d0,
-                          const std::vector<float>& s, int nthreads)
+                          const std::vector<float>& s, int nthreads,
+                          const std::atomic<bool>* cancel)
 {
     const int kw = k0reg.width();
     auto at      = [&](int x, int y) {
@@ -146,6 +148,8 @@ residual_bounded_variance(const FilterInputs& in, const ROI& pil,
     // Each pixel's term (z_l - out_l)^2 / (1 - 2 D), NaN where it has none.
     std::vector<float> term(k0reg.npixels(), NAN);
     for_rows(k0reg, nthreads, [&](int y) {
+        if (cancel_requested(cancel))
+            return;
         for (int x = k0reg.xbegin; x < k0reg.xend; ++x) {
             const size_t i = in.index(x, y), k = at(x, y);
             if (!(in.cls[i] & kFitPoint) || !(d0[k] < 0.5f))
@@ -158,6 +162,8 @@ residual_bounded_variance(const FilterInputs& in, const ROI& pil,
     });
     std::vector<float> sigma2(pil.npixels(), 0.0f);
     for_rows(pil, nthreads, [&](int y) {
+        if (cancel_requested(cancel))
+            return;
         for (int x = pil.xbegin; x < pil.xend; ++x) {
             const size_t j = size_t(y - pil.ybegin) * size_t(pil.width())
                              + size_t(x - pil.xbegin);
@@ -217,8 +223,10 @@ struct Selection {
         for (FeatureRegressionOptions& f : fos) {
             f.frame      = frame;
             f.albedo_eps = options.albedo_eps;
+            f.cancel     = options.cancel;
         }
-        so.frame = frame;
+        so.frame  = frame;
+        so.cancel = options.cancel;
         if (halves)
             so.confidence = kHalvesConfidence;
         sel   = halo_region(roi, frame, selection_halo(so));
@@ -425,10 +433,13 @@ run_candidate0(Selection& S, FilterStats& totals, Candidate0& c0)
         return false;
     read_fit_points(S, in, k0spread, c0);
     radiance_bounds(in, S.sel, S.base.r_max, c0.bound_lo, c0.bound_hi,
-                    c0.bound_ia, S.nthreads);
+                    c0.bound_ia, S.nthreads, S.options.cancel);
+    if (cancel_requested(S.options))
+        return false;
     if (!S.halves)
         c0.sigma2 = residual_bounded_variance(in, S.pil, S.k0reg, c0.o0_l,
-                                              c0.d0_k0, c0.s, S.nthreads);
+                                              c0.d0_k0, c0.s, S.nthreads,
+                                              S.options.cancel);
     return true;
 }
 
@@ -650,22 +661,26 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                            const FilterOptions& options, ROI roi, int nthreads,
                            FilterStats& totals)
 {
+    // Cancelled (FilterOptions::cancel): false between stages, and the
+    // stages that take long (candidate 0, the feature regressions) stop
+    // within; regression_filter() gives the message.
+    auto stopped = [&] { return cancel_requested(options); };
     Selection S(dst, quotient, albedo, guides, options, roi, nthreads);
     Candidate0 c0;
-    if (!run_candidate0(S, totals, c0))
+    if (!run_candidate0(S, totals, c0) || stopped())
         return false;
     HalvesRun h;
     ImageBuf pilot;
-    if (!make_pilot(S, c0, h, pilot))
+    if (!make_pilot(S, c0, h, pilot) || stopped())
         return false;
     const size_t nf = S.fos.size();
     std::vector<ImageBuf> out1(nf);
-    if (!filter_features(S, c0, pilot, out1))
+    if (!filter_features(S, c0, pilot, out1) || stopped())
         return false;
     const RiskInputs ri = risk_inputs(S, c0);
     ImageBuf risk0, chosen;
     std::vector<ImageBuf> risk1(nf);
-    if (!candidate_risks(S, ri, h, out1, risk0, risk1))
+    if (stopped() || !candidate_risks(S, ri, h, out1, risk0, risk1) || stopped())
         return false;
     std::vector<const ImageBuf*> candidates = { &ri.cand0 }, risks = { &risk0 };
     for (size_t f = 0; f < nf; ++f) {
@@ -673,8 +688,8 @@ selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         risks.push_back(&risk1[f]);
     }
     if (!select_by_risk(chosen, candidates, risks, S.so, nullptr, S.roi, nthreads))
-        return S.fail(chosen);
-    return write_selected(S, c0, chosen);
+        return stopped() ? false : S.fail(chosen);
+    return !stopped() && write_selected(S, c0, chosen);
 }
 
 }  // namespace detail
