@@ -29,11 +29,13 @@ using namespace detail;
 namespace {
 
 /// The light over the region: the denoised beauty, and the noisy groups
-/// followed by the rest (the beauty minus the groups), each clamped at 0;
-/// 3 floats a pixel each.
+/// followed by the rest (the beauty minus the groups) and the excess (the
+/// groups minus the beauty), each clamped at 0; 3 floats a pixel each.
+/// The excess is light the groups hold and the beauty does not: a world
+/// group's light where the film is transparent.
 struct GroupPlanes {
     std::vector<float> denoised;
-    std::vector<std::vector<float>> parts;  ///< the groups, then the rest
+    std::vector<std::vector<float>> parts;  ///< groups, rest, excess
 };
 
 /// The guide planes of `guides` over in.region as GuideWeight reads them.
@@ -75,10 +77,54 @@ read_planes(const ROI& region, const ImageBuf& denoised, const ImageBuf& beauty,
         }
         p.parts.push_back(std::move(light));
     }
-    for (float& v : rest)
-        v = std::max(v, 0.0f);
+    std::vector<float> excess(rest.size());
+    for (size_t i = 0; i < rest.size(); ++i) {
+        excess[i] = std::max(-rest[i], 0.0f);
+        rest[i]   = std::max(rest[i], 0.0f);
+    }
     p.parts.push_back(std::move(rest));
+    p.parts.push_back(std::move(excess));
     return p;
+}
+
+/// The window means `mean` of the groups and the rest (the last), made to
+/// add up to `target` (the light to split) into `out`: the difference goes
+/// to each in proportion to its variance `var` among the window's pixels
+/// (the least-squares adjustment of independent estimates to a known sum:
+/// a clean group keeps its mean, the noisy ones take the correction), or,
+/// where no part varies, in proportion to their means. A part that would
+/// go below 0 is 0 and the others share what is left.
+void
+reconcile(const std::vector<double>& mean, const std::vector<double>& var,
+          double target, std::vector<float>& out)
+{
+    const size_t n = mean.size();
+    std::vector<bool> fixed(n, false);
+    std::vector<double> x(mean);
+    for (size_t round = 0; round <= n; ++round) {
+        double diff = target, vsum = 0.0, msum = 0.0;
+        for (size_t k = 0; k < n; ++k) {
+            diff -= fixed[k] ? 0.0 : mean[k];
+            vsum += fixed[k] ? 0.0 : var[k];
+            msum += fixed[k] ? 0.0 : mean[k];
+        }
+        bool clipped = false;
+        for (size_t k = 0; k < n; ++k) {
+            if (fixed[k])
+                continue;
+            const double share = vsum > 0.0 ? var[k] / vsum
+                                 : msum > 0.0 ? mean[k] / msum
+                                              : (k + 1 == n ? 1.0 : 0.0);
+            x[k] = mean[k] + share * diff;
+            if (x[k] < 0.0) {
+                x[k] = 0.0, fixed[k] = true, clipped = true;
+            }
+        }
+        if (!clipped)
+            break;
+    }
+    for (size_t k = 0; k < n; ++k)
+        out[k] = float(x[k]);
 }
 
 /// Pixel (x, y)'s groups (3 floats each, into out[k]) from the window sums.
@@ -88,8 +134,9 @@ pixel_shares(const FilterInputs& in, const GroupPlanes& p, GuideWeight& gw,
              std::vector<float>& g, std::vector<double>& sums,
              std::vector<float*>& out)
 {
-    const size_t nparts = p.parts.size();
+    const size_t nparts = p.parts.size();  // the groups, rest, excess
     std::fill(sums.begin(), sums.end(), 0.0);
+    double wsum = 0.0;
     const size_t c0 = in.index(x, y);
     const float* b0 = &p.denoised[3 * c0];
     const int r = opt.radius;
@@ -118,19 +165,31 @@ pixel_shares(const FilterInputs& in, const GroupPlanes& p, GuideWeight& gw,
             const float w  = guide * std::exp(-(d2 * inv_r2 + like * inv_t2 / 3.0f));
             if (!(w > 0.0f))
                 continue;
+            wsum += double(w);
             for (size_t k = 0; k < nparts; ++k)
-                for (int c = 0; c < 3; ++c)
-                    sums[3 * k + size_t(c)] += double(w) * p.parts[k][3 * q + size_t(c)];
+                for (int c = 0; c < 3; ++c) {
+                    const double l = p.parts[k][3 * q + size_t(c)];
+                    sums[6 * k + size_t(c)] += double(w) * l;
+                    sums[6 * k + 3 + size_t(c)] += double(w) * l * l;
+                }
         }
     }
+    // wsum >= 1: the pixel itself, unless its light is not finite.
+    const size_t excess = nparts - 1;  // the groups and the rest before it
+    std::vector<double> mean(excess), var(excess);
+    std::vector<float> result(excess);
     for (int c = 0; c < 3; ++c) {
-        double total = 0.0;
-        for (size_t k = 0; k < nparts; ++k)
-            total += sums[3 * k + size_t(c)];
-        const double b = std::isfinite(b0[c]) ? double(b0[c]) : 0.0;
-        for (size_t k = 0; k + 1 < nparts; ++k)
-            out[k][c] = total > 0.0 ? float(b * sums[3 * k + size_t(c)] / total)
-                                    : 0.0f;
+        for (size_t k = 0; k < excess; ++k) {
+            mean[k] = wsum > 0.0 ? sums[6 * k + size_t(c)] / wsum : 0.0;
+            var[k]  = wsum > 0.0
+                          ? std::max(sums[6 * k + 3 + size_t(c)] / wsum - mean[k] * mean[k], 0.0)
+                          : 0.0;
+        }
+        const double target = (std::isfinite(b0[c]) ? double(b0[c]) : 0.0)
+                              + (wsum > 0.0 ? sums[6 * excess + size_t(c)] / wsum : 0.0);
+        reconcile(mean, var, target, result);
+        for (size_t k = 0; k + 1 < excess; ++k)
+            out[k][c] = result[k];
     }
 }
 
@@ -198,15 +257,20 @@ split_light_groups(std::vector<ImageBuf>& dst, const ImageBuf& denoised,
     const GroupPlanes planes = read_planes(in.region, denoised, beauty, groups);
     if (!decode_guides(in, err, guides, planes.denoised, filter, nthreads))
         return false;
-    for (ImageBuf& d : dst)
+    std::vector<bool> given;
+    for (ImageBuf& d : dst) {
+        given.push_back(d.initialized());
         if (!prepare_result(err, d, roi, frame, 3, opname, "dst"))
             return false;
+    }
     const size_t k = groups.size();
     std::vector<std::vector<float>> out(k, std::vector<float>(3 * roi.npixels()));
     for_rows(roi, nthreads, [&](int y) {
+        if (cancel_requested(filter))
+            return;
         GuideWeight gw(in, filter);
         std::vector<float> g(size_t(2 * options.radius + 1) + kPlanePadding);
-        std::vector<double> sums(3 * (k + 1));
+        std::vector<double> sums(6 * (k + 2));
         std::vector<float*> px(k);
         for (int x = roi.xbegin; x < roi.xend; ++x) {
             const size_t i = size_t(y - roi.ybegin) * size_t(roi.width())
@@ -216,6 +280,11 @@ split_light_groups(std::vector<ImageBuf>& dst, const ImageBuf& denoised,
             pixel_shares(in, planes, gw, options, x, y, g, sums, px);
         }
     });
+    if (cancel_requested(filter)) {
+        for (size_t j = 0; j < dst.size(); ++j)
+            cancelled(dst[j], given[j], roi, nthreads);
+        return false;
+    }
     ROI rgb    = roi;
     rgb.chbegin = 0;
     rgb.chend   = 3;

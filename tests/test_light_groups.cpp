@@ -11,6 +11,7 @@
 // them so, whatever the strips, and --no-light-groups copies them.
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -235,6 +236,14 @@ TEST(LightGroups, BadInputsAreRefusedWithAMessage)
     std::vector<ImageBuf> out2;
     EXPECT_FALSE(zdenoise::split_light_groups(out2, s.beauty, s.beauty, { &small }));
     EXPECT_NE(out2[0].geterror().find("light group"), std::string::npos) << out2[0].geterror();
+
+    const std::atomic<bool> stop { true };
+    zdenoise::FilterOptions cancelled;
+    cancelled.cancel = &stop;
+    std::vector<ImageBuf> out3;
+    EXPECT_FALSE(zdenoise::split_light_groups(out3, s.beauty, s.beauty, noisy_groups(s), {},
+                                              cancelled));
+    EXPECT_NE(out3[0].geterror().find("cancelled"), std::string::npos) << out3[0].geterror();
 }
 
 

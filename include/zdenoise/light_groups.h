@@ -34,17 +34,21 @@ ZDENOISE_API int light_groups_halo(const LightGroupOptions& options = {});
 /// Split the denoised beauty among light groups by their shares of the
 /// light around each pixel.
 ///
-/// The noisy groups G_k (and the rest, the beauty minus their sum, where
-/// positive) are summed over a window around each pixel, each neighbour
-/// weighted by the filter's guide weight g(q; p) (docs/FILTER.md section
-/// 4: normal, depth, object id, with `filter`'s normal_cut, normal_power
-/// and depth_tolerance), a spatial term exp(-d^2 / radius^2) and the
-/// likeness of its denoised light to the pixel's (`tolerance`); group k
-/// gets the denoised beauty times its sum over the sum of all, per
-/// channel. So every group is the denoised beauty's light, the groups and
-/// the rest add up to it exactly (to rounding), no group is negative, and
-/// the weights are computed once for all groups. Negative group values
-/// count as 0.
+/// The noisy groups G_k, the rest (the beauty minus their sum, where
+/// positive) and the excess (their sum minus the beauty, where positive:
+/// light the groups hold and the beauty does not, as a world group's where
+/// the film is transparent) are summed over a window around each pixel,
+/// each neighbour weighted by the filter's guide weight g(q; p)
+/// (docs/FILTER.md section 4: normal, depth, object id, with `filter`'s
+/// normal_cut, normal_power and depth_tolerance; a pixel that is no
+/// surface takes itself alone), a spatial term exp(-d^2 / radius^2) and
+/// the likeness of its denoised light to the pixel's (`tolerance`). The
+/// light to split is the denoised beauty plus the excess's weighted mean;
+/// group k gets it times its sum over the sum of the groups' and the
+/// rest's, per channel. So where the groups hold all the beauty's light
+/// and no more, they add up to the denoised beauty exactly (to rounding);
+/// no group is negative; the weights are computed once for all groups.
+/// Negative group values count as 0.
 ///
 /// @param dst       Receives one image per group (3 float channels over
 ///                  roi): resized to groups.size() (at least 1); each
@@ -57,8 +61,9 @@ ZDENOISE_API int light_groups_halo(const LightGroupOptions& options = {});
 ///                  pixels. At least one.
 /// @param guides    The normal, depth and object id guides, over the same
 ///                  pixels (the noise guides are not used).
-/// @param filter    The filter's options: its guide-weight parameters and
-///                  `frame`, as for denoise().
+/// @param filter    The filter's options: its guide-weight parameters,
+///                  `frame` and `cancel`, as for denoise() (a cancelled
+///                  call leaves dst as a cancelled denoise() leaves its).
 /// @param options   The share window.
 /// @param roi       The output pixels; default: the denoised beauty's data
 ///                  window.
