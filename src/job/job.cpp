@@ -110,9 +110,10 @@ Convention
 plan_roles(Job& j, InputFiles& files, Plan& p, AuxConvention& aux,
            std::vector<LayerArg>& layer_args, JobResult& result)
 {
-    const std::string invalid = validate(j, Spelling::CommandLine);
-    if (!invalid.empty())
-        fail(invalid);
+    for (const std::string& invalid : { validate(j, Spelling::CommandLine),
+                                        filter_options_problem(j.filter) })
+        if (!invalid.empty())
+            fail(invalid);
     const InputHeader& in = files.header(j.in.path);
     const Convention conv = detect_convention(in.channelnames);
     std::string remodulation;
