@@ -3,11 +3,14 @@
 //
 // The OpenImageIO plugin: any OIIO program reads a zdenoise recipe (.zdn,
 // share/zdn-format.md) as the image `zdenoise` would write for it. open()
-// runs the job once; the scanlines are then served from memory in the
-// output's per-channel pixel types, so that a program writing what it
-// reads writes the same file `zdenoise` does. The job streams its inputs
-// strip by strip (src/job/job.h), but a reader must hold the whole output:
-// memory follows the frame here, in the output's own pixel types.
+// reads the inputs' headers only (job::output_spec()), so that a program
+// listing recipes (iinfo, oiiotool --info, a browser) does not denoise
+// them; the first pixel read runs the job, once, and the scanlines are then
+// served from memory in the output's per-channel pixel types, so that a
+// program writing what it reads writes the same file `zdenoise` does. The
+// job streams its inputs strip by strip (src/job/job.h), but a reader must
+// hold the whole output: memory follows the frame here, in the output's
+// own pixel types.
 //
 // The format is named "zdenoise". OIIO's writers drop metadata whose
 // prefix before ':' is the name of another format, which is why zdenoise's
@@ -16,6 +19,7 @@
 #include <algorithm>
 #include <cstring>
 #include <map>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -118,8 +122,13 @@ public:
 
     bool close() override
     {
-        m_pixels = std::vector<unsigned char>();
-        m_spec   = ImageSpec();
+        std::lock_guard<std::mutex> lock(m_run_mutex);
+        m_recipe    = job::Job();
+        m_name      = std::string();
+        m_ran       = false;
+        m_run_error = std::string();
+        m_pixels    = std::vector<unsigned char>();
+        m_spec      = ImageSpec();
         return true;
     }
 
@@ -143,7 +152,21 @@ public:
 
 private:
     bool open_recipe(const std::string& name, ImageSpec& newspec);
+    /// Run the recipe unless it has run: whether its pixels are there (else
+    /// the run's error is this reader's).
+    bool denoised();
+    /// Run the recipe into m_pixels; "" or the error, as open() words it.
+    std::string run_recipe();
 
+    /// The open recipe (its threads settled) and its file name; empty when
+    /// none is open.
+    job::Job m_recipe;
+    std::string m_name;
+    /// Reads may come from several threads: the first runs the recipe,
+    /// the others wait for it; its error stays for every later read.
+    std::mutex m_run_mutex;
+    bool m_ran = false;
+    std::string m_run_error;
     /// The denoised image in its native layout: whole scanlines, each
     /// pixel's channels in their own pixel types (m_spec.channelformats).
     std::vector<unsigned char> m_pixels;
@@ -173,16 +196,56 @@ ZdnInput::open_recipe(const std::string& name, ImageSpec& newspec)
     if (recipe.threads == 0)
         recipe.threads = threads();
 
+    // The spec from the headers; the pixels wait for the first read.
     NativeImage image;
-    job::JobResult result;
-    if (!job::run_job(recipe, image, result, error)) {
+    if (!job::output_spec(recipe, image, m_spec, error)) {
         errorfmt("recipe '{}': {}", name, error);
         return false;
     }
-    m_spec   = image.spec;
-    m_pixels = std::move(image.pixels);
+    m_recipe = std::move(recipe);
+    m_name   = name;
     newspec  = m_spec;
     return true;
+}
+
+
+bool
+ZdnInput::denoised()
+{
+    std::lock_guard<std::mutex> lock(m_run_mutex);
+    if (!m_ran) {
+        try {
+            m_run_error = run_recipe();
+        } catch (const std::exception& e) {  // e.g. out of memory
+            m_run_error = Strutil::fmt::format("recipe '{}': {}", m_name,
+                                               e.what());
+        }
+        m_ran = true;
+    }
+    if (!m_run_error.empty())
+        errorfmt("{}", m_run_error);
+    return m_run_error.empty();
+}
+
+
+std::string
+ZdnInput::run_recipe()
+{
+    ReadingRecipe guard;
+    NativeImage image;
+    job::JobResult result;
+    std::string error;
+    if (!job::run_job(m_recipe, image, result, error))
+        return Strutil::fmt::format("recipe '{}': {}", m_name, error);
+    // An input rewritten since open() (another size, other channels) would
+    // give pixels of another layout than the spec the caller holds.
+    if (image.spec.serialize(ImageSpec::SerialText, ImageSpec::SerialDetailed)
+        != m_spec.serialize(ImageSpec::SerialText, ImageSpec::SerialDetailed))
+        return Strutil::fmt::format("recipe '{}': its inputs changed since it "
+                                    "was opened; open it again",
+                                    m_name);
+    m_pixels = std::move(image.pixels);
+    return std::string();
 }
 
 
@@ -191,7 +254,7 @@ ZdnInput::read_native_scanlines(int subimage, int miplevel, int ybegin,
                                      int yend, int z, int chbegin, int chend,
                                      void* data)
 {
-    if (m_pixels.empty()) {
+    if (m_name.empty()) {
         errorfmt("zdenoise: no recipe is open");
         return false;
     }
@@ -204,6 +267,8 @@ ZdnInput::read_native_scanlines(int subimage, int miplevel, int ybegin,
                  ybegin, yend, chbegin, chend, subimage, miplevel);
         return false;
     }
+    if (!denoised())
+        return false;
     const size_t pixel_bytes    = m_spec.pixel_bytes(true);
     const size_t scanline_bytes = m_spec.scanline_bytes(true);
     const size_t first          = m_spec.pixel_bytes(0, chbegin, true);

@@ -114,9 +114,10 @@ Convention
 plan_roles(Job& j, InputFiles& files, Plan& p, AuxConvention& aux,
            std::vector<LayerArg>& layer_args, JobResult& result)
 {
-    const std::string invalid = validate(j, Spelling::CommandLine);
-    if (!invalid.empty())
-        fail(invalid);
+    for (const std::string& invalid : { validate(j, Spelling::CommandLine),
+                                        filter_options_problem(j.filter) })
+        if (!invalid.empty())
+            fail(invalid);
     const InputHeader& in = files.header(j.in.path);
     const Convention conv = detect_convention(in.channelnames);
     std::string remodulation;
@@ -262,16 +263,13 @@ plan_output(const Job& j, InputFiles& files, Plan& p, JobResult& result)
 
 
 /// Stage 5 of plan(): the strips, from the memory each needs
-/// (memory_plan.cpp), and the sink begun.
+/// (memory_plan.cpp) with the output's rows as `sink` takes them.
 void
-plan_strips_and_begin(const Job& j, InputFiles& files, OutputSink& sink,
-                      const ImageSpec& spec, Plan& p, JobResult& result)
+plan_strips(const Job& j, InputFiles& files, const OutputSink& sink,
+            const ImageSpec& spec, Plan& p, JobResult& result)
 {
     const InputHeader& in = files.header(j.in.path);
     p.maps = j.diagnostics || !j.diagnostics_png.empty();
-    if (!j.diagnostics_png.empty())
-        p.picture = ErrorPicture(p.noisy);
-    p.output.sink = &sink;
     p.output.set_row_types(sink.float_rows());
     const StripCost cost = strip_cost(j, p, files, sink, spec);
     plan_strips(j, in, cost, result);
@@ -287,21 +285,16 @@ plan_strips_and_begin(const Job& j, InputFiles& files, OutputSink& sink,
     result.log.push_back("parameters " + describe(j.filter));
     result.log.push_back("vector kernels " + simd_target() + " (this CPU runs "
                          + Strutil::join(simd_targets(), ", ") + ")");
-
-    for (const std::string& path : files.paths())
-        files.rows(path).reserve(
-            std::min(result.strip_rows + 2 * cost.around, cost.height));
-    std::string err;
-    if (!sink.begin(spec, result.channel_formats, err))
-        throw SinkFailure { err };
 }
 
 
-/// Read the headers of job `j` (its convention's defaults applied) and
-/// decide everything: roles, colour, layers, output, strips. Fails before
-/// any pixel is read. Ends with the sink begun.
-void
-plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
+/// Stages 1-5 of plan(), which read the headers of job `j` (its
+/// convention's defaults applied) and no pixel: roles, colour, layers,
+/// output, strips. Returns the output's spec as the sink is begun with
+/// (`result.channel_formats` its pixel types).
+ImageSpec
+plan_from_headers(Job& j, InputFiles& files, const OutputSink& sink, Plan& p,
+                  JobResult& result)
 {
     AuxConvention aux;
     std::vector<LayerArg> layer_args;
@@ -310,7 +303,27 @@ plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
     log_roles(j, files, p, result);
     plan_light(j, files, conv, aux, layer_args, p, result);
     const ImageSpec spec = plan_output(j, files, p, result);
-    plan_strips_and_begin(j, files, sink, spec, p, result);
+    plan_strips(j, files, sink, spec, p, result);
+    return spec;
+}
+
+
+/// Decide everything from the headers (plan_from_headers()), then make
+/// ready for the pixels: the files' rows reserved, the sink begun.
+void
+plan(Job& j, InputFiles& files, OutputSink& sink, Plan& p, JobResult& result)
+{
+    const ImageSpec spec = plan_from_headers(j, files, sink, p, result);
+    if (!j.diagnostics_png.empty())
+        p.picture = ErrorPicture(p.noisy);
+    p.output.sink = &sink;
+    const int held = std::min(result.strip_rows + 2 * p.around,
+                              p.noisy.height());
+    for (const std::string& path : files.paths())
+        files.rows(path).reserve(held);
+    std::string err;
+    if (!sink.begin(spec, result.channel_formats, err))
+        throw SinkFailure { err };
 }
 
 
@@ -493,15 +506,14 @@ run(Job j, OutputSink& sink, JobResult& result)
     result.write_seconds += end_timer();
 }
 
-}  // namespace
-
-
+/// Run `step`, its failures caught as the one-line `error` the job's
+/// functions give (job.h). Returns whether it succeeded.
+template<class Step>
 bool
-run_job(const Job& job, OutputSink& sink, JobResult& result,
-        std::string& error)
+reporting_failures(Step&& step, std::string& error)
 {
     try {
-        run(job, sink, result);
+        step();
         return true;
     } catch (const Failure& f) {
         error = f.message;
@@ -511,6 +523,34 @@ run_job(const Job& job, OutputSink& sink, JobResult& result,
         error = one_line(e.what());
     }
     return false;
+}
+
+}  // namespace
+
+
+bool
+run_job(const Job& job, OutputSink& sink, JobResult& result,
+        std::string& error)
+{
+    return reporting_failures([&] { run(job, sink, result); }, error);
+}
+
+
+bool
+output_spec(const Job& job, const OutputSink& sink, ImageSpec& spec,
+            std::string& error)
+{
+    return reporting_failures(
+        [&] {
+            Job j = job;
+            InputFiles files;
+            Plan p;
+            JobResult result;
+            const ImageSpec planned = plan_from_headers(j, files, sink, p,
+                                                        result);
+            spec = native_spec(planned, result.channel_formats);
+        },
+        error);
 }
 
 bool

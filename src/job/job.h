@@ -33,6 +33,17 @@ bool
 run_job(const Job& job, OutputSink& sink, JobResult& result,
         std::string& error);
 
+/// The spec of `job`'s output as a file holds it (native_spec(): each
+/// channel in its pixel type, the metadata), from the input files' headers
+/// alone: no pixel is read, nothing filtered. It is run_job()'s own plan up
+/// to its first pixel, so the two cannot disagree, and it fails as run_job()
+/// would for anything a header shows (a missing file or channel, a bad
+/// option, a frame too large for the memory of `sink`'s strips). On
+/// failure returns false and run_job()'s one-line `error`. Never throws.
+bool
+output_spec(const Job& job, const OutputSink& sink, OIIO::ImageSpec& spec,
+            std::string& error);
+
 /// Run `job` into `result.image` (the whole output in memory, float).
 bool
 run_job(const Job& job, JobResult& result, std::string& error);

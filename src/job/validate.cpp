@@ -14,8 +14,10 @@
 #include <cstdlib>
 #include <cstring>
 
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/strutil.h>
 
+#include "failure.h"
 #include "validate.h"
 
 namespace zdenoise {
@@ -58,6 +60,27 @@ validate(const Job& job, Spelling spelling)
                    : format("\"albedo-samples\" must be 1 or more, not {}",
                             job.albedo_samples);
     return "";
+}
+
+
+std::string
+filter_options_problem(const FilterOptions& options)
+{
+    // The library checks its options only as it filters, and that check
+    // is not public (include/zdenoise/zdenoise.h): a 4x4 grey image asks
+    // it, in microseconds, without the job's pixels.
+    OIIO::ImageBuf grey(OIIO::ImageSpec(4, 4, 3, OIIO::TypeFloat));
+    OIIO::ImageBufAlgo::fill(grey, { 0.5f, 0.5f, 0.5f });
+    FilterOptions probe = options;
+    probe.progress      = nullptr;
+    probe.frame         = OIIO::ROI();
+    probe.diagnostics   = nullptr;
+    probe.hat_diagonal  = nullptr;
+    OIIO::ImageBuf filtered;
+    if (regression_filter(filtered, grey, grey, Guides(), probe, nullptr,
+                          OIIO::ROI(), 1))
+        return "";
+    return one_line(filtered.geterror());
 }
 
 

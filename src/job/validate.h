@@ -21,6 +21,13 @@ namespace job {
 std::string
 validate(const Job& job, Spelling spelling);
 
+/// The library's own check of the filter options (the ranges
+/// regression_filter() takes): "" or its one-line message. run_job() makes
+/// it before reading a pixel, so that bad options fail where a missing
+/// channel does (a recipe's open(), not its first read).
+std::string
+filter_options_problem(const FilterOptions& options);
+
 /// Unless `force`: the error for an `output` that is also an input of `job`
 /// (the same existing file, whatever the spelling of its path), which says
 /// how `spelling` allows it (--force, force=True); else "". The command
