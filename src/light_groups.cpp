@@ -185,8 +185,10 @@ pixel_shares(const FilterInputs& in, const GroupPlanes& p, GuideWeight& gw,
                           ? std::max(sums[6 * k + 3 + size_t(c)] / wsum - mean[k] * mean[k], 0.0)
                           : 0.0;
         }
+        // The excess is the pixel's own: a mean would carry a transparent
+        // neighbour's into a pixel whose groups hold just its beauty.
         const double target = (std::isfinite(b0[c]) ? double(b0[c]) : 0.0)
-                              + (wsum > 0.0 ? sums[6 * excess + size_t(c)] / wsum : 0.0);
+                              + double(p.parts[excess][3 * c0 + size_t(c)]);
         reconcile(mean, var, target, result);
         for (size_t k = 0; k + 1 < excess; ++k)
             out[k][c] = result[k];

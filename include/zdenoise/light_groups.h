@@ -43,7 +43,7 @@ ZDENOISE_API int light_groups_halo(const LightGroupOptions& options = {});
 /// normal_cut, normal_power and depth_tolerance; a pixel that is no
 /// surface takes itself alone), a spatial term exp(-d^2 / radius^2) and
 /// the likeness of its denoised light to the pixel's (`tolerance`). The
-/// light to split is the denoised beauty plus the excess's weighted mean;
+/// light to split is the denoised beauty plus the pixel's own excess;
 /// group k gets it times its sum over the sum of the groups' and the
 /// rest's, per channel. So where the groups hold all the beauty's light
 /// and no more, they add up to the denoised beauty exactly (to rounding);
