@@ -7,8 +7,9 @@
 // most half its noisy relMSE, the key's shadow edge stays in the key's
 // group, the groups add up to the denoised beauty, none is negative and
 // none gains energy, whatever the threads or the part computed. The command
-// finds a Cycles render's Combined_<group> passes with no flags, splits
-// them so, whatever the strips, and --no-light-groups copies them.
+// finds a Cycles render's Combined_<group> passes and Arnold's RGBA_<group>
+// AOVs with no flags, splits them so, whatever the strips, and
+// --no-light-groups copies them.
 
 #include <algorithm>
 #include <atomic>
@@ -354,4 +355,48 @@ TEST_F(LightGroupsCli, CyclesLightGroupsAreFoundDenoisedAndAddUp)
                   .nfail,
               0u)
         << "the groups do not change the beauty";
+}
+
+
+// Arnold writes the beauty as plain R, G, B, A and a light group as the AOV
+// RGBA_<group>.
+TEST_F(LightGroupsCli, ArnoldLightGroupAovsAreFoundBesideAPlainBeauty)
+{
+    const GroupScene s = make_scene(0.7f, 31);
+    std::vector<std::string> names = { "R", "G", "B", "A" };
+    for (const char* g : kGroupNames)
+        for (const char* c : { "R", "G", "B" })
+            names.push_back(std::string("RGBA_") + g + "." + c);
+    ImageSpec spec(W, H, int(names.size()), TypeFloat);
+    spec.channelnames  = names;
+    spec.alpha_channel = 3;
+    ImageBuf img(spec);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            std::vector<float> px(names.size());
+            s.beauty.getpixel(x, y, &px[0], 3);
+            px[3] = 1.0f;
+            for (int k = 0; k < 3; ++k)
+                s.noisy[k].getpixel(x, y, &px[size_t(4 + 3 * k)], 3);
+            img.setpixel(x, y, px.data(), int(px.size()));
+        }
+    ASSERT_TRUE(img.write(path("arnold.exr"))) << img.geterror();
+    ASSERT_TRUE(s.albedo_img.write(path("albedo.exr")));
+    const cli_test::RunResult res = run("--in " + path("arnold.exr") + " --albedo "
+                                        + path("albedo.exr") + " -o " + path("out.exr") + " -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    EXPECT_NE(res.out.find("light groups fill, key, sky split from the denoised beauty"),
+              std::string::npos)
+        << res.out;
+    ImageBuf out(path("out.exr"));
+    ASSERT_TRUE(out.read(0, 0, true, TypeFloat));
+    for (int k = 0; k < 3; ++k) {
+        const std::string layer = std::string("RGBA_") + kGroupNames[k];
+        ImageBuf g;
+        ImageBufAlgo::channels(g, out, 3,
+                               { out.spec().channelindex(layer + ".R"),
+                                 out.spec().channelindex(layer + ".G"),
+                                 out.spec().channelindex(layer + ".B") });
+        EXPECT_LT(relmse(g, s.clean[k]), 0.5 * relmse(s.noisy[k], s.clean[k])) << layer;
+    }
 }

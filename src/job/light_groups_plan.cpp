@@ -50,10 +50,15 @@ plan_light_groups(const Job& j, const InputHeader& in, const Selection& radiance
     const std::vector<std::string>& names = in.channelnames;
     std::string beauty, comp[3];
     for (int c = 0; c < 3; ++c) {
+        const std::string& n = names[size_t(radiance.indices[size_t(c)])];
         std::string layer;
-        if (!split_name(names[size_t(radiance.indices[size_t(c)])], layer, comp[c])
-            || (c > 0 && layer != beauty))
-            return plan;  // a beauty without a layer name has no groups
+        if (!split_name(n, layer, comp[c])) {
+            // A plain R, G, B beauty (Arnold's): its groups are RGBA_<group>.
+            layer   = "RGBA";
+            comp[c] = n;
+        }
+        if (c > 0 && layer != beauty)
+            return plan;
         beauty = layer;
     }
     const std::string prefix = beauty + "_";

@@ -32,7 +32,8 @@ struct LightGroupPlan {
 
 /// The groups of the --in file `in` beside the beauty `radiance` (channels
 /// named as the beauty's R, G, B with "_<group>" after the beauty's layer
-/// name), unless --no-light-groups. Layers, path and temporal modes copy
+/// name; RGBA_<group> beside a plain R, G, B beauty, as Arnold writes
+/// them), unless --no-light-groups. Layers, path and temporal modes copy
 /// them (said in `log`).
 LightGroupPlan
 plan_light_groups(const Job& j, const InputHeader& in, const Selection& radiance,
