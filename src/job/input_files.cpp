@@ -98,10 +98,6 @@ InputFiles::header(const std::string& path)
         fail(format("cannot read '{}': no such file", path));
     if (Filesystem::file_size(path) == 0)
         fail(format("cannot read '{}': the file is empty", path));
-    // The file as it is now: OIIO's shared ImageCache may hold an earlier
-    // version's header (a recipe opened, then its input rewritten), and
-    // its check of the file's time misses a rewrite within the second.
-    ImageCache::create(true)->invalidate(ustring(path), true);
     auto first = std::make_shared<const ImageBuf>(checked_part(path, 0));
     // OIIO falls back to reading by content; a file whose contents
     // contradict its name was most likely written wrongly upstream.
