@@ -279,9 +279,13 @@ TEST_F(RecipeOpen, AnInputRewrittenAfterOpenFailsTheRead)
         GTEST_SKIP() << "Debian's oiiotool, iinfo or python3 not found";
     write_recipe("shot.zdn");
     // Opened at 96x96; the render is then rewritten at 48x48 (by another
-    // program: this one's ImageCache would serve the old file).
-    write_text("rewrite.sh", host_program(ZDENOISE_OIIOTOOL) + " " + quoted(path("sample.exr"))
-                                 + " --cut 48x48+0+0 -o " + quoted(path("sample.exr")) + "\n");
+    // program: this one's ImageCache would serve the old file), a second
+    // later: OIIO's cache tells a changed file by its time, in seconds (on
+    // the CI machine the rewrite fell within the second and the old header
+    // was served).
+    write_text("rewrite.sh", "sleep 1.1\n" + host_program(ZDENOISE_OIIOTOOL) + " "
+                                 + quoted(path("sample.exr")) + " --cut 48x48+0+0 -o "
+                                 + quoted(path("sample.exr")) + "\n");
     RunResult r = python(
         "import subprocess\n"
         "reader = oiio.ImageInput.open(" + quoted(path("shot.zdn")) + ")\n"
