@@ -252,35 +252,69 @@ namespace {
 
 const char* const kGroupNames[3] = { "key", "fill", "sky" };
 
-/// The scene as a Blender Cycles multilayer EXR with three light groups.
+/// Planes of a test file: each image's first channels under `names`.
+struct Plane {
+    std::vector<std::string> names;
+    const ImageBuf* image;
+};
+
+/// "<layer>.R", "<layer>.G", "<layer>.B" (plain R, G, B for "").
+std::vector<std::string>
+rgb_names(const std::string& layer)
+{
+    std::vector<std::string> n;
+    for (const char* c : { "R", "G", "B" })
+        n.push_back(layer.empty() ? c : layer + "." + c);
+    return n;
+}
+
+/// The planes as one float EXR, the first plane's next channel its alpha.
 void
-write_cycles_groups(const GroupScene& s, const std::string& file)
+write_planes(const std::vector<Plane>& planes, const std::string& file)
 {
     std::vector<std::string> names;
-    auto rgb = [&](const std::string& layer) {
-        for (const char* c : { "R", "G", "B" })
-            names.push_back("ViewLayer." + layer + "." + c);
-    };
-    rgb("Combined");
-    names.push_back("ViewLayer.Combined.A");
-    for (const char* g : kGroupNames)
-        rgb(std::string("Combined_") + g);
-    rgb("Denoising Albedo");
+    for (const Plane& p : planes)
+        names.insert(names.end(), p.names.begin(), p.names.end());
     ImageSpec spec(W, H, int(names.size()), TypeFloat);
     spec.channelnames  = names;
     spec.alpha_channel = 3;
     ImageBuf img(spec);
+    std::vector<float> px(names.size()), one(3);
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {
-            std::vector<float> px(names.size());
-            s.beauty.getpixel(x, y, &px[0], 3);
-            px[3] = 1.0f;
-            for (int k = 0; k < 3; ++k)
-                s.noisy[k].getpixel(x, y, &px[size_t(4 + 3 * k)], 3);
-            s.albedo_img.getpixel(x, y, &px[13], 3);
+            size_t at = 0;
+            for (const Plane& p : planes) {
+                p.image->getpixel(x, y, one.data(), int(p.names.size()));
+                std::copy(one.begin(), one.begin() + long(p.names.size()), px.begin() + long(at));
+                at += p.names.size();
+            }
             img.setpixel(x, y, px.data(), int(px.size()));
         }
     ASSERT_TRUE(img.write(file)) << img.geterror();
+}
+
+/// A 1-channel image of `v` left of column `x0` and `right` from it on.
+ImageBuf
+split_constant(float v, int x0 = W, float right = 0.0f)
+{
+    ImageBuf img(ImageSpec(W, H, 1, TypeFloat));
+    ImageBufAlgo::fill(img, { v });
+    ImageBufAlgo::fill(img, { right }, ROI(x0, W, 0, H, 0, 1, 0, 1));
+    return img;
+}
+
+/// The scene as a Blender Cycles multilayer EXR with three light groups.
+void
+write_cycles_groups(const GroupScene& s, const std::string& file)
+{
+    const ImageBuf alpha = split_constant(1.0f);
+    std::vector<Plane> planes = { { rgb_names("ViewLayer.Combined"), &s.beauty },
+                                  { { "ViewLayer.Combined.A" }, &alpha } };
+    for (int k = 0; k < 3; ++k)
+        planes.push_back({ rgb_names(std::string("ViewLayer.Combined_") + kGroupNames[k]),
+                           &s.noisy[k] });
+    planes.push_back({ rgb_names("ViewLayer.Denoising Albedo"), &s.albedo_img });
+    write_planes(planes, file);
 }
 
 ImageBuf
@@ -298,6 +332,35 @@ layer_of(const std::string& file, const std::string& layer)
 
 class LightGroupsCli : public cli_test::CliTest {};
 
+/// Each group of the Cycles output `file` at most half its noisy relMSE;
+/// left of column `covered` (where the groups hold all the light), their
+/// sum within 1e-4 of the denoised beauty on every pixel.
+void
+expect_groups_denoised_and_adding_up(const GroupScene& s, const std::string& file,
+                                     int covered)
+{
+    const ImageBuf beauty = layer_of(file, "Combined");
+    ImageBuf sum(ImageSpec(W, H, 3, TypeFloat));
+    ImageBufAlgo::zero(sum);
+    for (int k = 0; k < 3; ++k) {
+        const ImageBuf g = layer_of(file, std::string("Combined_") + kGroupNames[k]);
+        const double before = relmse(s.noisy[k], s.clean[k]), after = relmse(g, s.clean[k]);
+        std::printf("  command: %s relMSE %.5f -> %.5f\n", kGroupNames[k], before, after);
+        EXPECT_LT(after, 0.5 * before) << kGroupNames[k];
+        ImageBufAlgo::add(sum, sum, g);
+    }
+    double worst = 0.0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < covered; ++x) {
+            float a[3], b[3];
+            sum.getpixel(x, y, a, 3);
+            beauty.getpixel(x, y, b, 3);
+            for (int c = 0; c < 3; ++c)
+                worst = std::max(worst, double(std::fabs(a[c] - b[c]) / (std::fabs(b[c]) + 1e-6)));
+        }
+    EXPECT_LT(worst, 1e-4) << "the groups add up to the denoised beauty";
+}
+
 }  // namespace
 
 
@@ -312,24 +375,7 @@ TEST_F(LightGroupsCli, CyclesLightGroupsAreFoundDenoisedAndAddUp)
               std::string::npos)
         << res.out;
     const ImageBuf beauty = layer_of(path("out.exr"), "Combined");
-    ImageBuf sum(ImageSpec(W, H, 3, TypeFloat));
-    for (int k = 0; k < 3; ++k) {
-        const ImageBuf g = layer_of(path("out.exr"), std::string("Combined_") + kGroupNames[k]);
-        const double before = relmse(s.noisy[k], s.clean[k]), after = relmse(g, s.clean[k]);
-        std::printf("  command: %s relMSE %.5f -> %.5f\n", kGroupNames[k], before, after);
-        EXPECT_LT(after, 0.5 * before) << kGroupNames[k];
-        ImageBufAlgo::add(sum, sum, g);
-    }
-    double worst = 0.0;
-    for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x) {
-            float a[3], b[3];
-            sum.getpixel(x, y, a, 3);
-            beauty.getpixel(x, y, b, 3);
-            for (int c = 0; c < 3; ++c)
-                worst = std::max(worst, double(std::fabs(a[c] - b[c]) / (std::fabs(b[c]) + 1e-6)));
-        }
-    EXPECT_LT(worst, 1e-4) << "the groups add up to the denoised beauty";
+    expect_groups_denoised_and_adding_up(s, path("out.exr"), W);
 
     ASSERT_EQ(run("--in " + path("groups.exr") + " -o " + path("strips.exr") + " --tile 8")
                   .status,
@@ -363,24 +409,11 @@ TEST_F(LightGroupsCli, CyclesLightGroupsAreFoundDenoisedAndAddUp)
 TEST_F(LightGroupsCli, ArnoldLightGroupAovsAreFoundBesideAPlainBeauty)
 {
     const GroupScene s = make_scene(0.7f, 31);
-    std::vector<std::string> names = { "R", "G", "B", "A" };
-    for (const char* g : kGroupNames)
-        for (const char* c : { "R", "G", "B" })
-            names.push_back(std::string("RGBA_") + g + "." + c);
-    ImageSpec spec(W, H, int(names.size()), TypeFloat);
-    spec.channelnames  = names;
-    spec.alpha_channel = 3;
-    ImageBuf img(spec);
-    for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x) {
-            std::vector<float> px(names.size());
-            s.beauty.getpixel(x, y, &px[0], 3);
-            px[3] = 1.0f;
-            for (int k = 0; k < 3; ++k)
-                s.noisy[k].getpixel(x, y, &px[size_t(4 + 3 * k)], 3);
-            img.setpixel(x, y, px.data(), int(px.size()));
-        }
-    ASSERT_TRUE(img.write(path("arnold.exr"))) << img.geterror();
+    const ImageBuf alpha = split_constant(1.0f);
+    std::vector<Plane> planes = { { rgb_names(""), &s.beauty }, { { "A" }, &alpha } };
+    for (int k = 0; k < 3; ++k)
+        planes.push_back({ rgb_names(std::string("RGBA_") + kGroupNames[k]), &s.noisy[k] });
+    write_planes(planes, path("arnold.exr"));
     ASSERT_TRUE(s.albedo_img.write(path("albedo.exr")));
     const cli_test::RunResult res = run("--in " + path("arnold.exr") + " --albedo "
                                         + path("albedo.exr") + " -o " + path("out.exr") + " -v");
@@ -398,5 +431,65 @@ TEST_F(LightGroupsCli, ArnoldLightGroupAovsAreFoundBesideAPlainBeauty)
                                  out.spec().channelindex(layer + ".G"),
                                  out.spec().channelindex(layer + ".B") });
         EXPECT_LT(relmse(g, s.clean[k]), 0.5 * relmse(s.noisy[k], s.clean[k])) << layer;
+    }
+}
+
+
+// Transparent film, as Cycles renders it: right of kFilm the beauty is 0
+// with alpha 0, while the Env pass and the world's group (sky) hold the
+// background. In every mode the beauty stays 0 there (layers mode used to
+// add the Env pass back: the sky painted into the holes), the groups are
+// split and add up to the beauty where the film is covered.
+TEST_F(LightGroupsCli, GroupsAreSplitInEveryModeUnderTransparentFilm)
+{
+    constexpr int kFilm = 80;
+    constexpr float kBackground = 0.4f;
+    GroupScene s = make_scene(0.7f, 41);
+    const ROI hole(kFilm, W, 0, H, 0, 1, 0, 3);
+    for (ImageBuf* img : { &s.beauty, &s.noisy[0], &s.noisy[1], &s.clean[0], &s.clean[1] })
+        ImageBufAlgo::zero(*img, hole);
+    for (ImageBuf* img : { &s.noisy[2], &s.clean[2] })
+        ImageBufAlgo::fill(*img, { kBackground, kBackground, kBackground }, hole);
+    // Cycles' lobes: DiffCol times (DiffDir + DiffInd) is the beauty.
+    ImageBuf colour = s.albedo_img, direct, indirect;
+    ImageBufAlgo::zero(colour, hole);
+    ImageBufAlgo::add(direct, s.noisy[0], s.noisy[1]);
+    ImageBufAlgo::div(direct, direct, s.albedo_img);
+    ImageBufAlgo::div(indirect, s.noisy[2], s.albedo_img);
+    ImageBufAlgo::zero(indirect, hole);
+    ImageBuf env(ImageSpec(W, H, 3, TypeFloat));
+    ImageBufAlgo::zero(env);
+    ImageBufAlgo::fill(env, { kBackground, kBackground, kBackground }, hole);
+    const ImageBuf alpha = split_constant(1.0f, kFilm, 0.0f);
+    std::vector<Plane> planes = { { rgb_names("ViewLayer.Combined"), &s.beauty },
+                                  { { "ViewLayer.Combined.A" }, &alpha } };
+    for (int k = 0; k < 3; ++k)
+        planes.push_back({ rgb_names(std::string("ViewLayer.Combined_") + kGroupNames[k]),
+                           &s.noisy[k] });
+    planes.push_back({ rgb_names("ViewLayer.Denoising Albedo"), &s.albedo_img });
+    planes.push_back({ rgb_names("ViewLayer.DiffCol"), &colour });
+    planes.push_back({ rgb_names("ViewLayer.DiffDir"), &direct });
+    planes.push_back({ rgb_names("ViewLayer.DiffInd"), &indirect });
+    planes.push_back({ rgb_names("ViewLayer.Env"), &env });
+    write_planes(planes, path("film.exr"));
+    for (const char* mode : { "beauty", "layers", "path" }) {
+        SCOPED_TRACE(mode);
+        const std::string out = path(std::string(mode) + ".exr");
+        const cli_test::RunResult res = run("--in " + path("film.exr") + " -o " + out
+                                            + " --mode " + mode + " -v");
+        ASSERT_EQ(res.status, 0) << res.err;
+        EXPECT_NE(res.out.find("light groups fill, key, sky split from the denoised beauty"),
+                  std::string::npos)
+            << res.out;
+        expect_groups_denoised_and_adding_up(s, out, kFilm);
+        const ImageBuf beauty = layer_of(out, "Combined");
+        float worst = 0.0f;
+        for (int y = 0; y < H; ++y)
+            for (int x = kFilm; x < W; ++x) {
+                float b[3];
+                beauty.getpixel(x, y, b, 3);
+                worst = std::max({ worst, std::fabs(b[0]), std::fabs(b[1]), std::fabs(b[2]) });
+            }
+        EXPECT_EQ(worst, 0.0f) << "no light where the film is transparent";
     }
 }

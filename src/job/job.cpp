@@ -236,7 +236,7 @@ plan_light(const Job& j, InputFiles& files, const Convention& conv,
     }
     log_mode(j, conv, p, layer_args, mode_line, result.log);
     p.groups = plan_light_groups(j, files.header(j.in.path), p.roles.radiance,
-                                 p.layered, result.log);
+                                 result.log);
 }
 
 

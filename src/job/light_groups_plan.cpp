@@ -44,7 +44,7 @@ split_name(const std::string& channel, std::string& layer, std::string& comp)
 
 LightGroupPlan
 plan_light_groups(const Job& j, const InputHeader& in, const Selection& radiance,
-                  bool layered, std::vector<std::string>& log)
+                  std::vector<std::string>& log)
 {
     LightGroupPlan plan;
     const std::vector<std::string>& names = in.channelnames;
@@ -85,7 +85,6 @@ plan_light_groups(const Job& j, const InputHeader& in, const Selection& radiance
         return plan;
     const std::string list = Strutil::join(plan.names, ", ");
     const char* why = j.no_light_groups ? "--no-light-groups"
-                      : layered         ? "--mode layers and path filter the lobes"
                       : j.temporal > 0  ? "--temporal"
                                         : nullptr;
     if (why) {

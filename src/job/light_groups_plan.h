@@ -33,11 +33,12 @@ struct LightGroupPlan {
 /// The groups of the --in file `in` beside the beauty `radiance` (channels
 /// named as the beauty's R, G, B with "_<group>" after the beauty's layer
 /// name; RGBA_<group> beside a plain R, G, B beauty, as Arnold writes
-/// them), unless --no-light-groups. Layers, path and temporal modes copy
-/// them (said in `log`).
+/// them), unless --no-light-groups. In every mode but temporal they are
+/// split from the denoised beauty (the sum of the denoised layers in layers
+/// and path modes); --temporal copies them (said in `log`).
 LightGroupPlan
 plan_light_groups(const Job& j, const InputHeader& in, const Selection& radiance,
-                  bool layered, std::vector<std::string>& log);
+                  std::vector<std::string>& log);
 
 /// Rows beyond a strip that the groups' split reads of the denoised
 /// beauty: the beauty is denoised this much further (0 without groups).
