@@ -37,17 +37,21 @@ ZDENOISE_API int light_groups_halo(const LightGroupOptions& options = {});
 /// The noisy groups G_k, the rest (the beauty minus their sum, where
 /// positive) and the excess (their sum minus the beauty, where positive:
 /// light the groups hold and the beauty does not, as a world group's where
-/// the film is transparent) are summed over a window around each pixel,
+/// the film is transparent) are averaged over a window around each pixel,
 /// each neighbour weighted by the filter's guide weight g(q; p)
 /// (docs/FILTER.md section 4: normal, depth, object id, with `filter`'s
 /// normal_cut, normal_power and depth_tolerance; a pixel that is no
 /// surface takes itself alone), a spatial term exp(-d^2 / radius^2) and
 /// the likeness of its denoised light to the pixel's (`tolerance`). The
-/// light to split is the denoised beauty plus the pixel's own excess;
-/// group k gets it times its sum over the sum of the groups' and the
-/// rest's, per channel. So where the groups hold all the beauty's light
-/// and no more, they add up to the denoised beauty exactly (to rounding);
-/// no group is negative; the weights are computed once for all groups.
+/// light to split is the denoised beauty plus the pixel's own excess. Per
+/// channel, the window means of the groups and the rest are made to add
+/// up to it by the minimum-variance adjustment of independent estimates to
+/// a known sum: each takes a part of the difference in proportion to its
+/// variance over the window (a clean group keeps its mean, the noisy ones
+/// take the correction); a part that would go below 0 is 0 and the others
+/// share what is left. So where the groups hold all the beauty's light and
+/// no more, they add up to the denoised beauty exactly (to rounding); no
+/// group is negative; the weights are computed once for all groups.
 /// Negative group values count as 0.
 ///
 /// @param dst       Receives one image per group (3 float channels over
