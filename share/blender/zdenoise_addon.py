@@ -11,8 +11,9 @@ After each render (each frame of an animation, in the UI and with `blender -b ..
 
 on it, and loads the denoised beauty of the view layer into the image "zdenoise" (its pixels
 in memory and packed, so nothing refers to the temporary folder), which every open Image
-Editor then shows. The temporary folder is deleted. Nothing else is written: only the
-output path of the panel, when one is given.
+Editor then shows, and each denoised light group into the image "zdenoise <group>". The
+temporary folder is deleted. Nothing else is written: only the output path of the panel,
+when one is given.
 
 How the work is split between threads: render handlers run in the render thread when the
 render was started from the UI (F12, Render Animation), and in the main thread in background
@@ -56,6 +57,8 @@ except ImportError:  # Blender always bundles numpy; the error is reported when 
 
 ADDON_ID = __name__
 IMAGE_NAME = "zdenoise"
+# Custom property on the images the add-on made.
+MARK = "zdenoise"
 ENV_EXECUTABLE = "ZDENOISE_EXECUTABLE"
 # Set in the environment of the Blender that renders the auxiliary image: there, an enabled
 # copy of this add-on must not denoise that render (nor start another auxiliary render).
@@ -474,6 +477,16 @@ def cycles_layer(channel_names):
     return first
 
 
+def light_group_names(channel_names, layer):
+    """The light groups of the layer, as zdenoise finds them: '<layer>Combined_<group>' with
+    R, G and B; sorted."""
+    prefix = layer + "Combined_"
+    names = set(channel_names)
+    return sorted(n[len(prefix):-2] for n in names
+                  if n.startswith(prefix) and n.endswith(".R") and len(n) > len(prefix) + 2
+                  and all(n[:-1] + c in names for c in "GB"))
+
+
 # ---------------------------------------------------------------------------------------
 # One frame's job
 
@@ -504,6 +517,8 @@ class Job:
         self.render = self.aux = self.blend = self.denoised = None
         self.layer = None
         self.pixels = None
+        self.groups = {}          # light group -> its denoised pixels, as self.pixels
+        self.groups_copied = []   # light groups zdenoise copied as they are (not beauty mode)
         self.size = (0, 0)
         self.seconds = 0.0
 
@@ -596,6 +611,39 @@ def _last_lines(text, n=3):
     return " | ".join(lines[-n:]) if lines else "no output"
 
 
+def _rgba(planes, rgb, alpha):
+    """Blender's pixel order (bottom row first, RGBA) of the planes `rgb` and `alpha`."""
+    h, w = planes[rgb[0]].shape
+    rgba = np.empty((h, w, 4), np.float32)
+    for i, n in enumerate(rgb):
+        rgba[:, :, i] = planes[n]
+    rgba[:, :, 3] = alpha
+    return np.ascontiguousarray(rgba[::-1]).reshape(-1)
+
+
+def read_denoised(job):
+    """The denoised beauty and light groups of the job's layer, in Blender's pixel order."""
+    header = read_exr_header_file(job.denoised)
+    channels = [n for n, _ in header["channels"]]
+    beauty = [job.layer + f"Combined.{c}" for c in "RGB"]
+    alpha = job.layer + "Combined.A"
+    groups = light_group_names(channels, job.layer)
+    if job.mode != "beauty":
+        # zdenoise copies them as they are (the lobes are filtered apart): not denoised.
+        job.groups_copied, groups = groups, []
+    rgb = {g: [job.layer + f"Combined_{g}.{c}" for c in "RGB"] for g in groups}
+    wanted = beauty + ([alpha] if alpha in channels else []) + sum(rgb.values(), [])
+    planes = read_exr_channels(job.denoised, wanted)
+    a = planes[alpha] if alpha in planes else 1.0
+    job.pixels = _rgba(planes, beauty, a)
+    # A group's light is a share of the beauty pixel's, rendered over the same film: it is
+    # as premultiplied as the beauty, so the beauty's alpha is the group's. Groups added up
+    # with Mix nodes (which keep their first input's alpha) then composite as the beauty.
+    job.groups = {g: _rgba(planes, names, a) for g, names in rgb.items()}
+    h, w = planes[beauty[0]].shape
+    job.size = (w, h)
+
+
 def run(job):
     """Any thread, no Blender data: the auxiliary render, zdenoise, reading the result."""
     if job.error:
@@ -627,18 +675,7 @@ def run(job):
         p = _run(command)
         if p.returncode != 0:
             raise RuntimeError(f"zdenoise failed (exit {p.returncode}): {_last_lines(p.stdout, 1)}")
-        names = [job.layer + c for c in ("Combined.R", "Combined.G", "Combined.B")]
-        header = read_exr_header_file(job.denoised)
-        alpha = job.layer + "Combined.A"
-        has_alpha = any(n == alpha for n, _ in header["channels"])
-        planes = read_exr_channels(job.denoised, names + ([alpha] if has_alpha else []))
-        h, w = planes[names[0]].shape
-        rgba = np.empty((h, w, 4), np.float32)
-        for i, n in enumerate(names):
-            rgba[:, :, i] = planes[n]
-        rgba[:, :, 3] = planes[alpha] if has_alpha else 1.0
-        job.pixels = np.ascontiguousarray(rgba[::-1]).reshape(-1)  # Blender: bottom row first
-        job.size = (w, h)
+        read_denoised(job)
     except FileNotFoundError as e:
         job.error = f"could not run {e.filename}: {e.strerror}"
     except Exception as e:  # noqa: BLE001
@@ -646,29 +683,52 @@ def run(job):
     job.seconds = time.time() - start
 
 
-def store_image(job):
-    """Main thread: the image 'zdenoise' holds the denoised beauty, packed."""
+def group_image_name(group):
+    return f"{IMAGE_NAME} {group}"
+
+
+def store_image(job, name=IMAGE_NAME, pixels=None, group=None):
+    """Main thread: the image `name` holds the denoised pixels (the beauty's by default),
+    packed."""
     w, h = job.size
-    image = bpy.data.images.get(IMAGE_NAME)
-    if image is not None and (not image.get("zdenoise") or not image.is_float):
+    image = bpy.data.images.get(name)
+    if image is not None and (not image.get(MARK) or not image.is_float):
         # Not one this add-on made: replaced by a new one.
         bpy.data.images.remove(image)
         image = None
     if image is None:
         # A float buffer: its colour space is the scene linear one, as the EXR's.
-        image = bpy.data.images.new(IMAGE_NAME, w, h, alpha=True, float_buffer=True)
-        image["zdenoise"] = True
+        image = bpy.data.images.new(name, w, h, alpha=True, float_buffer=True)
+        image[MARK] = True
     elif tuple(image.size) != (w, h):
         image.scale(w, h)
     image.alpha_mode = "STRAIGHT"
-    image.pixels.foreach_set(job.pixels)
+    image.pixels.foreach_set(job.pixels if pixels is None else pixels)
     image.update()
     # Packed: its pixels are kept in the .blend and survive a reload; nothing refers to the
     # temporary folder.
     image.pack()
     image["zdenoise_frame"] = job.frame
     image["zdenoise_layer"] = job.layer[:-1] if job.layer else ""
+    if group is not None:
+        image["zdenoise_group"] = group
     return image
+
+
+def store_group_images(job):
+    """Main thread: an image for each denoised light group; the add-on's images of groups
+    this render has not (denoised) are removed. The image names, sorted.
+
+    One the user renamed (or copied) is theirs now, and kept."""
+    names = []
+    for group, pixels in sorted(job.groups.items()):
+        names.append(store_image(job, group_image_name(group), pixels, group).name)
+    for image in list(bpy.data.images):
+        group = image.get("zdenoise_group")
+        if (image.get(MARK) and isinstance(group, str) and group not in job.groups
+                and image.name == group_image_name(group)):
+            bpy.data.images.remove(image)
+    return names
 
 
 def show_image(image):
@@ -697,6 +757,7 @@ def finish(job):
         if not job.error:
             try:
                 image = store_image(job)
+                store_group_images(job)
                 show_image(image)
             except Exception as e:  # noqa: BLE001
                 job.error = f"could not make the image: {e}"
@@ -709,8 +770,14 @@ def finish(job):
             aux = " with the auxiliary albedo" if job.use_aux else ""
             if job.view_layers > 1 and job.layer:
                 aux = f" (view layer '{job.layer[:-1]}')" + aux
+            groups = ""
+            if job.groups:
+                groups = f", light groups {', '.join(sorted(job.groups))}"
+            elif job.groups_copied:
+                groups = (f", light groups {', '.join(job.groups_copied)} not denoised in "
+                          f"{job.mode} mode")
             text = (f"Frame {job.frame} denoised{aux} in {job.seconds:.1f} s "
-                    f"({job.size[0]}x{job.size[1]}, {job.mode}){where}{notes}")
+                    f"({job.size[0]}x{job.size[1]}, {job.mode}{groups}){where}{notes}")
             log(text)
         set_status(job.scene_name, text, bool(job.error))
         return text
