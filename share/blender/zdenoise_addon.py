@@ -11,9 +11,10 @@ After each render (each frame of an animation, in the UI and with `blender -b ..
 
 on it, and loads the denoised beauty of the view layer into the image "zdenoise" (its pixels
 in memory and packed, so nothing refers to the temporary folder), which every open Image
-Editor then shows, and each denoised light group into the image "zdenoise <group>". The
-temporary folder is deleted. Nothing else is written: only the output path of the panel,
-when one is given.
+Editor then shows, and each denoised light group into the image "zdenoise <group>". When
+the scene uses the compositor, an Image node for each of these images is kept in a frame
+"zdenoise" of its node tree. The temporary folder is deleted. Nothing else is written: only
+the output path of the panel, when one is given.
 
 How the work is split between threads: render handlers run in the render thread when the
 render was started from the UI (F12, Render Animation), and in the main thread in background
@@ -57,8 +58,10 @@ except ImportError:  # Blender always bundles numpy; the error is reported when 
 
 ADDON_ID = __name__
 IMAGE_NAME = "zdenoise"
-# Custom property on the images the add-on made.
+# Custom property on what the add-on made: images ("zdenoise": True) and compositor nodes
+# ("zdenoise": the image name, or FRAME_MARK on the frame holding them).
 MARK = "zdenoise"
+FRAME_MARK = "frame"
 ENV_EXECUTABLE = "ZDENOISE_EXECUTABLE"
 # Set in the environment of the Blender that renders the auxiliary image: there, an enabled
 # copy of this add-on must not denoise that render (nor start another auxiliary render).
@@ -196,6 +199,13 @@ class ZDENOISE_SceneSettings(bpy.types.PropertyGroup):
         ),
         default="beauty",
         update=_enable_update,
+    )
+    compositor_nodes: BoolProperty(
+        name="Compositor nodes",
+        description="When the scene uses the compositor, keep an Image node for the image "
+                    "'zdenoise' and for each light group's image in a frame 'zdenoise' of "
+                    "its node tree (the compositor is never turned on by the add-on)",
+        default=True,
     )
     output_path: StringProperty(
         name="Output",
@@ -519,6 +529,7 @@ class Job:
         self.pixels = None
         self.groups = {}          # light group -> its denoised pixels, as self.pixels
         self.groups_copied = []   # light groups zdenoise copied as they are (not beauty mode)
+        self.compositor_nodes = s.compositor_nodes
         self.size = (0, 0)
         self.seconds = 0.0
 
@@ -731,6 +742,79 @@ def store_group_images(job):
     return names
 
 
+# ---------------------------------------------------------------------------------------
+# Compositor nodes
+
+
+NODE_STEP = 340      # vertical distance of the Image nodes (with their preview)
+NODE_WIDTH = 140     # an Image node's default width
+NODE_GAP = 120       # between the frame and the user's leftmost node
+
+
+def _view_location(node):
+    """A node's location in the editor: a node in a frame is placed relative to it."""
+    x, y = node.location
+    parent = node.parent
+    while parent is not None:
+        x, y = x + parent.location.x, y + parent.location.y
+        parent = parent.parent
+    return x, y
+
+
+def _place_frame(frame, user_nodes):
+    """Left of the user's nodes, its top level with the highest of them."""
+    spots = [_view_location(n) for n in user_nodes] or [(0.0, 0.0)]
+    frame.location = (min(x for x, _ in spots) - NODE_GAP - NODE_WIDTH - 40,
+                      max(y for _, y in spots))
+
+
+def _our_frame(tree):
+    """The add-on's frame, made (left of the user's nodes) when there is none. (frame, new)"""
+    frame = next((n for n in tree.nodes if n.get(MARK) == FRAME_MARK), None)
+    if frame is not None:
+        return frame, False
+    user_nodes = [n for n in tree.nodes if not n.get(MARK)]
+    frame = tree.nodes.new("NodeFrame")
+    frame.name = frame.label = IMAGE_NAME
+    frame[MARK] = FRAME_MARK
+    frame.shrink = True
+    _place_frame(frame, user_nodes)
+    return frame, True
+
+
+def update_compositor(scene, image_names):
+    """Main thread, only when the scene uses nodes: one Image node for each of the add-on's
+    images (found again by its mark), in the frame 'zdenoise'; the add-on's nodes of images
+    gone are removed. The user's nodes are not touched."""
+    tree = scene.node_tree
+    frame, changed = _our_frame(tree)
+    found = {}
+    for node in [n for n in tree.nodes if n.get(MARK) not in (None, FRAME_MARK)]:
+        name = node.get(MARK)
+        if name not in image_names:
+            tree.nodes.remove(node)
+            changed = True
+        elif name not in found:  # (a copy the user made with Shift+D is left alone)
+            found[name] = node
+    for name in image_names:
+        node = found.get(name)
+        if node is None:
+            node = found[name] = tree.nodes.new("CompositorNodeImage")
+            node.name = name
+            node[MARK] = name
+            changed = True
+        if node.image is None or node.image.name != name:
+            node.image = bpy.data.images[name]
+    if changed:
+        # Laid out again only when the column changed, so that nodes the user moved
+        # stay where they are otherwise.
+        for i, name in enumerate(image_names):
+            node = found[name]
+            if node.parent != frame:
+                node.parent = frame
+            node.location = (20, -40 - i * NODE_STEP)
+
+
 def show_image(image):
     wm = bpy.context.window_manager
     for window in (wm.windows if wm else []):
@@ -757,10 +841,18 @@ def finish(job):
         if not job.error:
             try:
                 image = store_image(job)
-                store_group_images(job)
+                names = [image.name] + store_group_images(job)
                 show_image(image)
             except Exception as e:  # noqa: BLE001
                 job.error = f"could not make the image: {e}"
+        if not job.error:
+            scene = bpy.data.scenes.get(job.scene_name)
+            try:
+                if (scene is not None and scene.use_nodes and scene.node_tree is not None
+                        and job.compositor_nodes):
+                    update_compositor(scene, names)
+            except Exception as e:  # noqa: BLE001
+                job.error = f"could not update the compositor's nodes: {e}"
         notes = f" (turned on {'; '.join(job.notes)})" if job.notes else ""
         if job.error:
             text = f"Frame {job.frame}: {job.error}{notes}"
@@ -919,6 +1011,9 @@ class ZDENOISE_PT_render(bpy.types.Panel):
                 col.label(text=why, icon="ERROR")
         row = col.row()
         row.prop(s, "mode", expand=True)
+        sub = col.row()
+        sub.active = s.enabled and scene.use_nodes
+        sub.prop(s, "compositor_nodes")
         col.prop(s, "output_path")
         if not s.output_path:
             col.label(text="No output path: the result is only shown (image 'zdenoise')")
