@@ -11,8 +11,10 @@ After each render (each frame of an animation, in the UI and with `blender -b ..
 
 on it, and loads the denoised beauty of the view layer into the image "zdenoise" (its pixels
 in memory and packed, so nothing refers to the temporary folder), which every open Image
-Editor then shows. The temporary folder is deleted. Nothing else is written: only the
-output path of the panel, when one is given.
+Editor then shows, and each denoised light group into the image "zdenoise <group>". When
+the scene uses the compositor, an Image node for each of these images is kept in a frame
+"zdenoise" of its node tree. The temporary folder is deleted. Nothing else is written: only
+the output path of the panel, when one is given.
 
 How the work is split between threads: render handlers run in the render thread when the
 render was started from the UI (F12, Render Animation), and in the main thread in background
@@ -56,6 +58,10 @@ except ImportError:  # Blender always bundles numpy; the error is reported when 
 
 ADDON_ID = __name__
 IMAGE_NAME = "zdenoise"
+# Custom property on what the add-on made: images ("zdenoise": True) and compositor nodes
+# ("zdenoise": the image name, or FRAME_MARK on the frame holding them).
+MARK = "zdenoise"
+FRAME_MARK = "frame"
 ENV_EXECUTABLE = "ZDENOISE_EXECUTABLE"
 # Set in the environment of the Blender that renders the auxiliary image: there, an enabled
 # copy of this add-on must not denoise that render (nor start another auxiliary render).
@@ -193,6 +199,13 @@ class ZDENOISE_SceneSettings(bpy.types.PropertyGroup):
         ),
         default="beauty",
         update=_enable_update,
+    )
+    compositor_nodes: BoolProperty(
+        name="Compositor nodes",
+        description="When the scene uses the compositor, keep an Image node for the image "
+                    "'zdenoise' and for each light group's image in a frame 'zdenoise' of "
+                    "its node tree (the compositor is never turned on by the add-on)",
+        default=True,
     )
     output_path: StringProperty(
         name="Output",
@@ -474,6 +487,16 @@ def cycles_layer(channel_names):
     return first
 
 
+def light_group_names(channel_names, layer):
+    """The light groups of the layer, as zdenoise finds them: '<layer>Combined_<group>' with
+    R, G and B; sorted."""
+    prefix = layer + "Combined_"
+    names = set(channel_names)
+    return sorted(n[len(prefix):-2] for n in names
+                  if n.startswith(prefix) and n.endswith(".R") and len(n) > len(prefix) + 2
+                  and all(n[:-1] + c in names for c in "GB"))
+
+
 # ---------------------------------------------------------------------------------------
 # One frame's job
 
@@ -504,6 +527,8 @@ class Job:
         self.render = self.aux = self.blend = self.denoised = None
         self.layer = None
         self.pixels = None
+        self.groups = {}          # light group -> its denoised pixels, as self.pixels
+        self.compositor_nodes = s.compositor_nodes
         self.size = (0, 0)
         self.seconds = 0.0
 
@@ -596,6 +621,36 @@ def _last_lines(text, n=3):
     return " | ".join(lines[-n:]) if lines else "no output"
 
 
+def _rgba(planes, rgb, alpha):
+    """Blender's pixel order (bottom row first, RGBA) of the planes `rgb` and `alpha`."""
+    h, w = planes[rgb[0]].shape
+    rgba = np.empty((h, w, 4), np.float32)
+    for i, n in enumerate(rgb):
+        rgba[:, :, i] = planes[n]
+    rgba[:, :, 3] = alpha
+    return np.ascontiguousarray(rgba[::-1]).reshape(-1)
+
+
+def read_denoised(job):
+    """The denoised beauty and light groups of the job's layer, in Blender's pixel order."""
+    header = read_exr_header_file(job.denoised)
+    channels = [n for n, _ in header["channels"]]
+    beauty = [job.layer + f"Combined.{c}" for c in "RGB"]
+    alpha = job.layer + "Combined.A"
+    groups = light_group_names(channels, job.layer)
+    rgb = {g: [job.layer + f"Combined_{g}.{c}" for c in "RGB"] for g in groups}
+    wanted = beauty + ([alpha] if alpha in channels else []) + sum(rgb.values(), [])
+    planes = read_exr_channels(job.denoised, wanted)
+    a = planes[alpha] if alpha in planes else 1.0
+    job.pixels = _rgba(planes, beauty, a)
+    # A group's light is a share of the beauty pixel's, rendered over the same film: it is
+    # as premultiplied as the beauty, so the beauty's alpha is the group's. Groups added up
+    # with Mix nodes (which keep their first input's alpha) then composite as the beauty.
+    job.groups = {g: _rgba(planes, names, a) for g, names in rgb.items()}
+    h, w = planes[beauty[0]].shape
+    job.size = (w, h)
+
+
 def run(job):
     """Any thread, no Blender data: the auxiliary render, zdenoise, reading the result."""
     if job.error:
@@ -627,18 +682,7 @@ def run(job):
         p = _run(command)
         if p.returncode != 0:
             raise RuntimeError(f"zdenoise failed (exit {p.returncode}): {_last_lines(p.stdout, 1)}")
-        names = [job.layer + c for c in ("Combined.R", "Combined.G", "Combined.B")]
-        header = read_exr_header_file(job.denoised)
-        alpha = job.layer + "Combined.A"
-        has_alpha = any(n == alpha for n, _ in header["channels"])
-        planes = read_exr_channels(job.denoised, names + ([alpha] if has_alpha else []))
-        h, w = planes[names[0]].shape
-        rgba = np.empty((h, w, 4), np.float32)
-        for i, n in enumerate(names):
-            rgba[:, :, i] = planes[n]
-        rgba[:, :, 3] = planes[alpha] if has_alpha else 1.0
-        job.pixels = np.ascontiguousarray(rgba[::-1]).reshape(-1)  # Blender: bottom row first
-        job.size = (w, h)
+        read_denoised(job)
     except FileNotFoundError as e:
         job.error = f"could not run {e.filename}: {e.strerror}"
     except Exception as e:  # noqa: BLE001
@@ -646,29 +690,125 @@ def run(job):
     job.seconds = time.time() - start
 
 
-def store_image(job):
-    """Main thread: the image 'zdenoise' holds the denoised beauty, packed."""
+def group_image_name(group):
+    return f"{IMAGE_NAME} {group}"
+
+
+def store_image(job, name=IMAGE_NAME, pixels=None, group=None):
+    """Main thread: the image `name` holds the denoised pixels (the beauty's by default),
+    packed."""
     w, h = job.size
-    image = bpy.data.images.get(IMAGE_NAME)
-    if image is not None and (not image.get("zdenoise") or not image.is_float):
+    image = bpy.data.images.get(name)
+    if image is not None and (not image.get(MARK) or not image.is_float):
         # Not one this add-on made: replaced by a new one.
         bpy.data.images.remove(image)
         image = None
     if image is None:
         # A float buffer: its colour space is the scene linear one, as the EXR's.
-        image = bpy.data.images.new(IMAGE_NAME, w, h, alpha=True, float_buffer=True)
-        image["zdenoise"] = True
+        image = bpy.data.images.new(name, w, h, alpha=True, float_buffer=True)
+        image[MARK] = True
     elif tuple(image.size) != (w, h):
         image.scale(w, h)
     image.alpha_mode = "STRAIGHT"
-    image.pixels.foreach_set(job.pixels)
+    image.pixels.foreach_set(job.pixels if pixels is None else pixels)
     image.update()
     # Packed: its pixels are kept in the .blend and survive a reload; nothing refers to the
     # temporary folder.
     image.pack()
     image["zdenoise_frame"] = job.frame
     image["zdenoise_layer"] = job.layer[:-1] if job.layer else ""
+    if group is not None:
+        image["zdenoise_group"] = group
     return image
+
+
+def store_group_images(job):
+    """Main thread: an image for each denoised light group; the add-on's images of groups
+    this render has not (denoised) are removed. The image names, sorted.
+
+    One the user renamed (or copied) is theirs now, and kept."""
+    names = []
+    for group, pixels in sorted(job.groups.items()):
+        names.append(store_image(job, group_image_name(group), pixels, group).name)
+    for image in list(bpy.data.images):
+        group = image.get("zdenoise_group")
+        if (image.get(MARK) and isinstance(group, str) and group not in job.groups
+                and image.name == group_image_name(group)):
+            bpy.data.images.remove(image)
+    return names
+
+
+# ---------------------------------------------------------------------------------------
+# Compositor nodes
+
+
+NODE_STEP = 340      # vertical distance of the Image nodes (with their preview)
+NODE_WIDTH = 140     # an Image node's default width
+NODE_GAP = 120       # between the frame and the user's leftmost node
+
+
+def _view_location(node):
+    """A node's location in the editor: a node in a frame is placed relative to it."""
+    x, y = node.location
+    parent = node.parent
+    while parent is not None:
+        x, y = x + parent.location.x, y + parent.location.y
+        parent = parent.parent
+    return x, y
+
+
+def _place_frame(frame, user_nodes):
+    """Left of the user's nodes, its top level with the highest of them."""
+    spots = [_view_location(n) for n in user_nodes] or [(0.0, 0.0)]
+    frame.location = (min(x for x, _ in spots) - NODE_GAP - NODE_WIDTH - 40,
+                      max(y for _, y in spots))
+
+
+def _our_frame(tree):
+    """The add-on's frame, made (left of the user's nodes) when there is none. (frame, new)"""
+    frame = next((n for n in tree.nodes if n.get(MARK) == FRAME_MARK), None)
+    if frame is not None:
+        return frame, False
+    user_nodes = [n for n in tree.nodes if not n.get(MARK)]
+    frame = tree.nodes.new("NodeFrame")
+    frame.name = frame.label = IMAGE_NAME
+    frame[MARK] = FRAME_MARK
+    frame.shrink = True
+    _place_frame(frame, user_nodes)
+    return frame, True
+
+
+def update_compositor(scene, image_names):
+    """Main thread, only when the scene uses nodes: one Image node for each of the add-on's
+    images (found again by its mark), in the frame 'zdenoise'; the add-on's nodes of images
+    gone are removed. The user's nodes are not touched."""
+    tree = scene.node_tree
+    frame, changed = _our_frame(tree)
+    found = {}
+    for node in [n for n in tree.nodes if n.get(MARK) not in (None, FRAME_MARK)]:
+        name = node.get(MARK)
+        if name not in image_names:
+            tree.nodes.remove(node)
+            changed = True
+        elif name not in found:  # (a copy the user made with Shift+D is left alone)
+            found[name] = node
+    for name in image_names:
+        node = found.get(name)
+        if node is None:
+            node = found[name] = tree.nodes.new("CompositorNodeImage")
+            node.name = name
+            node[MARK] = name
+            changed = True
+        if node.image is None or node.image.name != name:
+            node.image = bpy.data.images[name]
+    if changed:
+        # Laid out again only when the column changed, so that nodes the user moved
+        # stay where they are otherwise.
+        for i, name in enumerate(image_names):
+            node = found[name]
+            if node.parent != frame:
+                node.parent = frame
+            node.location = (20, -40 - i * NODE_STEP)
 
 
 def show_image(image):
@@ -697,9 +837,18 @@ def finish(job):
         if not job.error:
             try:
                 image = store_image(job)
+                names = [image.name] + store_group_images(job)
                 show_image(image)
             except Exception as e:  # noqa: BLE001
                 job.error = f"could not make the image: {e}"
+        if not job.error:
+            scene = bpy.data.scenes.get(job.scene_name)
+            try:
+                if (scene is not None and scene.use_nodes and scene.node_tree is not None
+                        and job.compositor_nodes):
+                    update_compositor(scene, names)
+            except Exception as e:  # noqa: BLE001
+                job.error = f"could not update the compositor's nodes: {e}"
         notes = f" (turned on {'; '.join(job.notes)})" if job.notes else ""
         if job.error:
             text = f"Frame {job.frame}: {job.error}{notes}"
@@ -709,8 +858,11 @@ def finish(job):
             aux = " with the auxiliary albedo" if job.use_aux else ""
             if job.view_layers > 1 and job.layer:
                 aux = f" (view layer '{job.layer[:-1]}')" + aux
+            groups = ""
+            if job.groups:
+                groups = f", light groups {', '.join(sorted(job.groups))}"
             text = (f"Frame {job.frame} denoised{aux} in {job.seconds:.1f} s "
-                    f"({job.size[0]}x{job.size[1]}, {job.mode}){where}{notes}")
+                    f"({job.size[0]}x{job.size[1]}, {job.mode}{groups}){where}{notes}")
             log(text)
         set_status(job.scene_name, text, bool(job.error))
         return text
@@ -852,6 +1004,9 @@ class ZDENOISE_PT_render(bpy.types.Panel):
                 col.label(text=why, icon="ERROR")
         row = col.row()
         row.prop(s, "mode", expand=True)
+        sub = col.row()
+        sub.active = s.enabled and scene.use_nodes
+        sub.prop(s, "compositor_nodes")
         col.prop(s, "output_path")
         if not s.output_path:
             col.label(text="No output path: the result is only shown (image 'zdenoise')")
