@@ -128,6 +128,13 @@ parse_value(const job::Option& option, const std::string& opt,
                  kExitUsage);
         break;
     }
+    case Kind::Names: {
+        const std::string name = value();
+        if (name.empty())
+            fail(format("{}: the name is empty", opt), kExitUsage);
+        std::get<Field<std::vector<std::string>>>(option.field)(c).push_back(name);
+        break;
+    }
     case Kind::Layers: {
         const std::string text = value();
         c.job.layers.emplace_back();

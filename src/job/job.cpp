@@ -237,6 +237,8 @@ plan_light(const Job& j, InputFiles& files, const Convention& conv,
     log_mode(j, conv, p, layer_args, mode_line, result.log);
     p.groups = plan_light_groups(j, files.header(j.in.path), p.roles.radiance,
                                  result.log);
+    p.aovs = plan_aovs(j, files.header(j.in.path), p.roles.radiance, p.groups,
+                       result.log);
 }
 
 
@@ -246,7 +248,7 @@ plan_output(const Job& j, InputFiles& files, Plan& p, JobResult& result)
 {
     const InputHeader& in = files.header(j.in.path);
     ImageSpec spec;
-    layout_output(j, in, p.roles.radiance, p.layers, p.groups, spec,
+    layout_output(j, in, p.roles.radiance, p.layers, p.groups, p.aovs, spec,
                   p.output.channels,
                   result.channel_formats);
     if (p.managed)

@@ -67,6 +67,9 @@ struct Job {
     /// Copy the light groups as they are (--no-light-groups); by default
     /// they are split from the denoised beauty (light_groups_plan.h).
     bool no_light_groups = false;
+    /// Other radiance AOVs denoised with the beauty's guides (--aov NAME,
+    /// repeatable; aov_plan.h).
+    std::vector<std::string> aovs;
     /// Samples per pixel of the albedo for its prefilter
     /// (prefilter_albedo(); --albedo-samples); 0: the render's count from
     /// its metadata when the albedo is the --in file's and no --aux is

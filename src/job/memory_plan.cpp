@@ -103,10 +103,11 @@ strip_cost(const Job& j, const Plan& p, InputFiles& files,
     // A direct layer's keep_structure() and denoise_alpha()'s read one
     // pixel beyond the strip.
     const bool alpha = denoised_alpha_channel(j, p.roles.radiance) >= 0;
-    cost.halo = filter_halo(j.filter) + (p.path || alpha ? 1 : 0);
+    cost.halo = filter_halo(j.filter)
+                + (p.path || alpha ? 1 : 0);
     // The residual layer's mask looks further than the filter.
     cost.around = cost.halo + p.layers.reach
-                  + p.albedo.halo() + light_groups_reach(p.groups);
+                  + p.albedo.halo() + split_reach(p.groups, p.aovs);
     add_file_costs(cost, files);
     // Role images: copies when converted or not lying together in the
     // file, else the file's rows themselves (Strip::image()). The quotient
@@ -125,6 +126,11 @@ strip_cost(const Job& j, const Plan& p, InputFiles& files,
     const double groups = double(p.groups.names.size());
     cost.held_pixel += groups * 12.0 + (groups > 0 ? 16.0 : 0.0);
     cost.core_pixel += groups * 12.0;
+    // The AOVs (--aov): each one's copy (held) and result, split one at a
+    // time; the denoised beauty around the strip as for the groups.
+    const double aovs = double(p.aovs.names.size());
+    cost.held_pixel += aovs * 12.0 + (aovs > 0 && groups == 0 ? 16.0 : 0.0);
+    cost.core_pixel += aovs * 12.0;
     if (!p.layered)
         cost.held_pixel += role_bytes(files, p.roles.albedo, p.albedo_as_is);
     for (const OptionalRole* o : p.roles.optional())

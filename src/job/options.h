@@ -51,6 +51,7 @@ enum class Kind {
     Mode,      ///< parse_mode()
     DataType,  ///< parse_data_type()
     Layers,    ///< parse_layer(); repeatable
+    Names,     ///< a non-empty name; repeatable (a recipe's list)
     Preset,    ///< apply_preset(): the base the filter options modify
     Help,      ///< prints the help and exits
     Version    ///< prints the version and exits
@@ -66,7 +67,8 @@ struct Option {
     std::variant<std::monostate, Field<InputArg>, Field<bool>,
                  Field<std::string>, Field<float>, Field<int>,
                  Field<uint64_t>, Field<Mode>, Field<OIIO::TypeDesc>,
-                 Field<std::vector<LayerArg>>>
+                 Field<std::vector<LayerArg>>,
+                 Field<std::vector<std::string>>>
         field;
     const char* arg  = "";       ///< the value in the help ("FILE")
     const char* help = nullptr;  ///< lines of help; null: not listed

@@ -101,7 +101,7 @@ output_spec(const InputHeader& in)
 void
 layout_output(const Job& j, const InputHeader& in, const Selection& radiance,
               const LayersPlan& layers, const LightGroupPlan& groups,
-              ImageSpec& spec,
+              const AovPlan& aovs, ImageSpec& spec,
               std::vector<OutputChannel>& channels,
               std::vector<TypeDesc>& formats)
 {
@@ -138,6 +138,12 @@ layout_output(const Job& j, const InputHeader& in, const Selection& radiance,
             const int i = groups.channels[k].indices[size_t(c)];
             channels[size_t(i)] = { -1, light_group_image(j, layers, radiance, k),
                                     c, in.format(i) };
+        }
+    const int first_aov = light_group_image(j, layers, radiance, groups.names.size());
+    for (size_t k = 0; k < aovs.channels.size(); ++k)
+        for (int c = 0; c < 3; ++c) {
+            const int i = aovs.channels[k].indices[size_t(c)];
+            channels[size_t(i)] = { -1, first_aov + int(k), c, in.format(i) };
         }
     formats = write_formats(spec, channels, j.data_type);
 }

@@ -17,6 +17,7 @@
 
 #include "input_files.h"
 #include "layers_plan.h"
+#include "aov_plan.h"
 #include "light_groups_plan.h"
 #include "strips.h"
 
@@ -38,12 +39,12 @@ struct OutputChannel {
 /// added; the alpha that job `j` denoises from the denoised alpha. Images:
 /// 0 the denoised beauty, 1 + i layer i, then the maps (diagnostics_image()),
 /// then the alpha (alpha_image()), then the light groups of `groups`
-/// (light_group_image()). `spec` is as an ImageBuf of the --in file's pixels has
+/// (light_group_image()), then the AOVs of `aovs`. `spec` is as an ImageBuf of the --in file's pixels has
 /// it (part 0's spec, the channels and metadata of every part).
 void
 layout_output(const Job& j, const InputHeader& in, const Selection& radiance,
               const LayersPlan& layers, const LightGroupPlan& groups,
-              OIIO::ImageSpec& spec,
+              const AovPlan& aovs, OIIO::ImageSpec& spec,
               std::vector<OutputChannel>& channels,
               std::vector<OIIO::TypeDesc>& formats);
 

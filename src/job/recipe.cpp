@@ -310,6 +310,16 @@ parse_option(const Option& option, const json& value, const Source& source,
         }
         break;
     }
+    case Kind::Names: {
+        if (!value.is_array())
+            fail_escaped(format("\"{}\" must be a list of names, not {}", key,
+                                shown(value)));
+        std::vector<std::string>& names
+            = std::get<Field<std::vector<std::string>>>(option.field)(command);
+        for (const json& name : value)
+            names.push_back(parse_string(key, name, true));
+        break;
+    }
     case Kind::Mode:
     case Kind::DataType: {
         const std::string text = parse_string(key, value, false);
@@ -617,6 +627,13 @@ recipe_text(const Job& job, const std::string& preset,
             if (job.mode != Mode::Auto)
                 value = mode_name(job.mode);
             break;
+        case Kind::Names: {
+            const std::vector<std::string>& names
+                = std::get<Field<std::vector<std::string>>>(o.field)(command);
+            if (!names.empty())
+                value = names;
+            break;
+        }
         case Kind::Layers:
             if (!job.layers.empty()) {
                 value = nlohmann::ordered_json::array();

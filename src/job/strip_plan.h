@@ -16,6 +16,7 @@
 #include <zdenoise/zdenoise.h>
 
 #include "albedo_plan.h"
+#include "aov_plan.h"
 #include "diagnostics_picture.h"
 #include "input_files.h"
 #include "job_types.h"
@@ -44,6 +45,7 @@ struct Plan {
     bool radiance_as_is = true, albedo_as_is = true;
     LayersPlan layers;
     LightGroupPlan groups;  ///< split from the denoised beauty
+    AovPlan aovs;           ///< --aov
     Output output;
     int around = 0;  ///< rows a strip reads above and below its own
     /// The filter's diagnostic maps are computed (--diagnostics, or

@@ -27,7 +27,7 @@ namespace {
 
 /// The filter's run on strip `s` (of `strips`) into `denoised` (and the
 /// maps, with their statistics into `st`): over the strip's rows, and,
-/// when light groups are split, over light_groups_reach() rows above and
+/// when light groups or AOVs are split, over split_reach() rows above and
 /// below it too (each a run of its own, so that the statistics stay the
 /// strip's and the result is what one run over all the rows gives).
 void
@@ -44,7 +44,7 @@ filter_strip(const Job& j, const Plan& p, int s, int strips, const Strip& strip,
         };
     if (p.maps)
         options.diagnostics = &maps;
-    const ROI wide = strip.widened(light_groups_reach(p.groups));
+    const ROI wide = strip.widened(split_reach(p.groups, p.aovs));
     if (wide != strip.core) {
         // One image over all the rows, which the runs below fill in parts.
         ImageSpec spec(ROI(wide.xbegin, wide.xend, wide.ybegin, wide.yend, 0, 1, 0,
@@ -109,7 +109,7 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
         make_albedo(p.albedo, img.albedo, img.own_albedo, img.half_a_albedo,
                     img.half_b_albedo,
                     strip.widened(filter_halo(j.filter) + temporal_reach(j)
-                                  + light_groups_reach(p.groups)),
+                                  + split_reach(p.groups, p.aovs)),
                     strip.core, j.threads, p.pooled, j.albedo.path);
     if (j.temporal > 0)
         combine_neighbours(j, p, files, strip, img, result);
@@ -145,6 +145,14 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
             [&](ImageBuf& g) {
                 convert_role(p, g, p.spaces.input, p.spaces.working, j.in);
             });
+    std::vector<ImageBuf> aovs;
+    if (!p.aovs.empty())
+        aovs = denoise_strip_aovs(j, p.aovs, strip, p.noisy, denoised,
+                                  img.radiance, guides,
+                                  [&](ImageBuf& a) {
+                                      convert_role(p, a, p.spaces.input,
+                                                   p.spaces.working, j.in);
+                                  });
     result.denoise_seconds += denoise_timer();
     // Statistics summed over the strips (exact sums: they do not depend
     // on the strips).
@@ -165,6 +173,10 @@ run_strip(const Job& j, Plan& p, InputFiles& files, int s,
     for (ImageBuf& g : groups) {  // at light_group_image()
         convert_role(p, g, p.spaces.working, p.spaces.output, j.in);
         images.push_back(&g);
+    }
+    for (ImageBuf& a : aovs) {  // after the groups: layout_output()
+        convert_role(p, a, p.spaces.working, p.spaces.output, j.in);
+        images.push_back(&a);
     }
     if (!j.diagnostics_png.empty() && !p.picture.keep(maps, strip.core))
         fail(format("--diagnostics-png: {}", one_line(maps.geterror())));
