@@ -20,6 +20,7 @@
 #include "failure.h"
 #include "frames.h"
 #include "options.h"
+#include "recipe_values.h"
 #include "validate.h"
 
 namespace zdenoise {
@@ -32,6 +33,8 @@ using json           = nlohmann::json;
 using OIIO::TypeDesc;
 namespace fs         = std::filesystem;
 
+using namespace recipe_values;
+
 namespace {
 
 /// Recipes are small; a bigger file is something else, and is not read
@@ -39,17 +42,6 @@ namespace {
 constexpr uint64_t kMaxRecipeBytes = 1 << 20;
 
 constexpr const char* kVersionKey = "zdenoise-recipe";
-
-/// Throw `message` with its control characters escaped: it quotes keys
-/// and values the recipe or its REST arguments gave, and an error stays
-/// one line whatever they hold (a newline in a key; found by
-/// tests/fuzz/fuzz_recipe).
-[[noreturn]] void
-fail_escaped(const std::string& message)
-{
-    fail(control_escaped(message));
-}
-
 
 /// The keys of a recipe; `in_file_name`: those a file name's REST-style
 /// arguments may override.
@@ -74,15 +66,6 @@ struct Source {
     const RecipeRules* rules = nullptr;
     Spelling spelling        = Spelling::Recipe;
 };
-
-
-/// A value as the recipe spells it, cut short for messages.
-std::string
-shown(const json& value)
-{
-    std::string s = value.dump();
-    return s.size() > 40 ? s.substr(0, 37) + "..." : s;
-}
 
 
 bool
@@ -151,36 +134,6 @@ parse_input(const std::string& key, const json& value, const Source& source)
 }
 
 
-double
-parse_number(const std::string& key, const json& value)
-{
-    if (!value.is_number())
-        fail_escaped(format("\"{}\" must be a number, not {}", key, shown(value)));
-    return value.get<double>();
-}
-
-/// A filter option's number: it must fit a float (1e50 would become
-/// infinity, which a recipe cannot even be written back with).
-float
-parse_float(const std::string& key, const json& value)
-{
-    const double v = parse_number(key, value);
-    if (!(std::fabs(v) <= double(std::numeric_limits<float>::max())))
-        fail_escaped(format("\"{}\" is out of range: {}", key, shown(value)));
-    return float(v);
-}
-
-int
-parse_whole_number(const std::string& key, const json& value)
-{
-    double v = parse_number(key, value);
-    if (v != std::floor(v) || std::fabs(v) > 1e6)
-        fail_escaped(format("\"{}\" must be a whole number, not {}", key,
-                    shown(value)));
-    return int(v);
-}
-
-
 /// Apply the REST-style arguments to the recipe's keys: each replaces the
 /// key of its name; "preset" replaces every filter option of the recipe by
 /// the preset's (then other arguments apply on top).
@@ -239,18 +192,6 @@ apply_overrides(json& recipe,
         default: recipe[key] = text;
         }
     }
-}
-
-
-/// A string value; `name`: one that may not be empty.
-std::string
-parse_string(const std::string& key, const json& value, bool name)
-{
-    if (!value.is_string() || (name && value.get<std::string>().empty()))
-        fail_escaped(format(name ? "\"{}\" must be a name in a string, not {}"
-                         : "\"{}\" must be a string, not {}",
-                    key, shown(value)));
-    return value.get<std::string>();
 }
 
 
