@@ -464,13 +464,24 @@ drop_where_transparent(ImageBuf& unfiltered, const ImageBuf& beauty)
 {
     if (beauty.nchannels() < 4)
         return;
-    const ROI roi = unfiltered.roi();
-    ImageBuf::Iterator<float> u(unfiltered, roi);
-    ImageBuf::ConstIterator<float> b(beauty, roi);
-    for (; !u.done(); ++u, ++b)
-        if (!(b[3] >= 1.0f))
-            for (int c = 0; c < roi.nchannels(); ++c)
-                u[c] = 0.0f;
+    // Through get/set_pixels: the beauty may be the file's half rows.
+    ROI roi = unfiltered.roi(), a = roi;
+    a.chbegin = 3;
+    a.chend   = 4;
+    std::vector<float> alpha(a.npixels());
+    beauty.get_pixels(a, TypeFloat, alpha.data());
+    if (std::all_of(alpha.begin(), alpha.end(), [](float v) { return v >= 1.0f; }))
+        return;
+    // `unfiltered` may be the file's rows, which the output copies: the
+    // change goes to a copy of its own.
+    const size_t nch = size_t(roi.nchannels());
+    std::vector<float> light(roi.npixels() * nch);
+    unfiltered.get_pixels(roi, TypeFloat, light.data());
+    for (size_t i = 0; i < alpha.size(); ++i)
+        if (!(alpha[i] >= 1.0f))
+            std::fill_n(light.begin() + long(i * nch), nch, 0.0f);
+    unfiltered.reset(ImageSpec(roi, TypeFloat));
+    unfiltered.set_pixels(roi, TypeFloat, light.data());
 }
 
 
