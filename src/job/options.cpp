@@ -220,12 +220,12 @@ options()
           "Default: each is the denoised beauty's light times its\n"
           "share around the pixel, so that they add up to it\n"
           "(docs/LIGHT_GROUPS.md)." },
-        { Kind::Names, "--aov", "aov", FIELD(job.aovs), "NAME",
+        not_in_file_name({ Kind::Names, "--aov", "aov", FIELD(job.aovs), "NAME",
           "Also denoise the radiance AOV NAME (repeatable): its\n"
           "NAME.R,G,B channels, or the beauty's layer's\n"
           "(ViewLayer.NAME.R,G,B: Emit, a volume, an LPE), as\n"
           "its share of the denoised beauty; other channels are\n"
-          "copied (docs/AOVS.md)." },
+          "copied (docs/AOVS.md)." }),
         { Kind::Flag, "--diagnostics", "diagnostics", FIELD(job.diagnostics), "",
           "Add the filter's maps to the output: zdenoise.radius,\n"
           "zdenoise.stop (1 quality, 2 size, 3 edge, 0 not\n"
