@@ -137,25 +137,18 @@ denoise_strip_aovs(const Job& j, const AovPlan& aovs, const Strip& strip,
     // then gives back what the AOV shows beyond its noise, and leaves a
     // noise-free pixel as rendered (a clean emitter's or sky's: the split
     // carried light across their edges, Emit at 64 spp 17x the input's).
-    Guides g;
-    g.normal    = guides.normal;
-    g.depth     = guides.depth;
-    g.object_id = guides.object_id;
-    FilterOptions options = j.filter;
-    options.frame         = frame;
-    options.progress      = nullptr;
+    const Guides g = surface_guides(guides);
     std::vector<ImageBuf> out(aovs.names.size());
     for (size_t k = 0; k < out.size(); ++k) {
         ImageBuf light = strip.image(aovs.channels[k], false);
         convert(light);
-        std::vector<ImageBuf> split;
-        if (!split_light_groups(split, denoised, radiance, { &light }, g,
-                                options, {}, strip.widened(1), j.threads)
-            || !keep_structure(out[k], light, split[0], g, frame, nullptr,
-                               strip.core, j.threads))
+        const std::vector<ImageBuf> split
+            = split_from_beauty(j, frame, denoised, radiance, { &light }, guides,
+                                strip.widened(1), "the AOV " + aovs.names[k]);
+        if (!keep_structure(out[k], light, split[0], g, frame, nullptr,
+                            strip.core, j.threads))
             fail(format("denoising the AOV {} of '{}' failed: {}",
-                        aovs.names[k], j.in.path,
-                        one_line(split[0].geterror() + out[k].geterror())));
+                        aovs.names[k], j.in.path, one_line(out[k].geterror())));
     }
     return out;
 }

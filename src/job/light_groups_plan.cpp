@@ -105,6 +105,35 @@ light_groups_reach(const LightGroupPlan& groups)
 }
 
 
+Guides
+surface_guides(const Guides& guides)
+{
+    Guides g;
+    g.normal    = guides.normal;
+    g.depth     = guides.depth;
+    g.object_id = guides.object_id;
+    return g;
+}
+
+
+std::vector<ImageBuf>
+split_from_beauty(const Job& j, const ROI& frame, const ImageBuf& denoised,
+                  const ImageBuf& radiance,
+                  const std::vector<const ImageBuf*>& parts,
+                  const Guides& guides, const ROI& roi, const std::string& what)
+{
+    const Guides g        = surface_guides(guides);
+    FilterOptions options = j.filter;
+    options.frame         = frame;
+    std::vector<ImageBuf> out;
+    if (!split_light_groups(out, denoised, radiance, parts, g, options, {}, roi,
+                            j.threads))
+        fail(format("{} of '{}': {}", what, j.in.path,
+                    one_line(out[0].geterror())));
+    return out;
+}
+
+
 std::vector<ImageBuf>
 denoise_strip_light_groups(const Job& j, const LightGroupPlan& groups,
                            const Strip& strip, const ROI& frame,
@@ -119,18 +148,8 @@ denoise_strip_light_groups(const Job& j, const LightGroupPlan& groups,
         convert(noisy[k]);
         given.push_back(&noisy[k]);
     }
-    Guides g;
-    g.normal    = guides.normal;
-    g.depth     = guides.depth;
-    g.object_id = guides.object_id;
-    FilterOptions options = j.filter;
-    options.frame         = frame;
-    std::vector<ImageBuf> out;
-    if (!split_light_groups(out, denoised, radiance, given, g, options, {},
-                            strip.core, j.threads))
-        fail(format("the light groups of '{}': {}", j.in.path,
-                    one_line(out[0].geterror())));
-    return out;
+    return split_from_beauty(j, frame, denoised, radiance, given, guides,
+                             strip.core, "the light groups");
 }
 
 }  // namespace job

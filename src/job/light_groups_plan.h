@@ -45,6 +45,23 @@ plan_light_groups(const Job& j, const InputHeader& in, const Selection& radiance
 int
 light_groups_reach(const LightGroupPlan& groups);
 
+/// The normal, depth and object id of `guides`: a surface's, which the
+/// splits read (the noise guides describe the beauty's noise).
+Guides
+surface_guides(const Guides& guides);
+
+/// Light the beauty holds, `parts` (3 float channels each, over the
+/// strip's held rows), split from the denoised beauty `denoised` over
+/// `roi` by split_light_groups(), with the noisy `radiance` and the
+/// normal, depth and object id of `guides`. `what` names the parts in an
+/// error ("the light groups").
+std::vector<OIIO::ImageBuf>
+split_from_beauty(const Job& j, const OIIO::ROI& frame,
+                  const OIIO::ImageBuf& denoised, const OIIO::ImageBuf& radiance,
+                  const std::vector<const OIIO::ImageBuf*>& parts,
+                  const Guides& guides, const OIIO::ROI& roi,
+                  const std::string& what);
+
 /// Strip `strip`'s groups (read from its files, converted like the
 /// radiance by `convert`), split from the denoised beauty `denoised` (over
 /// the strip widened by light_groups_reach()) and the noisy `radiance`

@@ -103,8 +103,7 @@ strip_cost(const Job& j, const Plan& p, InputFiles& files,
     // A direct layer's keep_structure() and denoise_alpha()'s read one
     // pixel beyond the strip.
     const bool alpha = denoised_alpha_channel(j, p.roles.radiance) >= 0;
-    cost.halo = filter_halo(j.filter)
-                + (p.path || alpha ? 1 : 0);
+    cost.halo = filter_halo(j.filter) + (p.path || alpha ? 1 : 0);
     // The residual layer's mask looks further than the filter.
     cost.around = cost.halo + p.layers.reach
                   + p.albedo.halo() + split_reach(p.groups, p.aovs);
