@@ -305,18 +305,26 @@ split_constant(float v, int x0 = W, float right = 0.0f)
     return img;
 }
 
-/// The scene as a Blender Cycles multilayer EXR with three light groups.
-void
-write_cycles_groups(const GroupScene& s, const std::string& file)
+/// The scene's planes as Blender Cycles names them: the beauty with
+/// `alpha`, the three light groups and the albedo.
+std::vector<Plane>
+cycles_group_planes(const GroupScene& s, const ImageBuf& alpha)
 {
-    const ImageBuf alpha = split_constant(1.0f);
     std::vector<Plane> planes = { { rgb_names("ViewLayer.Combined"), &s.beauty },
                                   { { "ViewLayer.Combined.A" }, &alpha } };
     for (int k = 0; k < 3; ++k)
         planes.push_back({ rgb_names(std::string("ViewLayer.Combined_") + kGroupNames[k]),
                            &s.noisy[k] });
     planes.push_back({ rgb_names("ViewLayer.Denoising Albedo"), &s.albedo_img });
-    write_planes(planes, file);
+    return planes;
+}
+
+/// The scene as a Blender Cycles multilayer EXR with three light groups.
+void
+write_cycles_groups(const GroupScene& s, const std::string& file)
+{
+    const ImageBuf alpha = split_constant(1.0f);
+    write_planes(cycles_group_planes(s, alpha), file);
 }
 
 ImageBuf
@@ -466,12 +474,7 @@ TEST_F(LightGroupsCli, GroupsAreSplitInEveryModeUnderTransparentFilm)
     ImageBufAlgo::zero(env);
     ImageBufAlgo::fill(env, { kBackground, kBackground, kBackground }, hole);
     const ImageBuf alpha = split_constant(1.0f, kFilm, 0.0f);
-    std::vector<Plane> planes = { { rgb_names("ViewLayer.Combined"), &s.beauty },
-                                  { { "ViewLayer.Combined.A" }, &alpha } };
-    for (int k = 0; k < 3; ++k)
-        planes.push_back({ rgb_names(std::string("ViewLayer.Combined_") + kGroupNames[k]),
-                           &s.noisy[k] });
-    planes.push_back({ rgb_names("ViewLayer.Denoising Albedo"), &s.albedo_img });
+    std::vector<Plane> planes = cycles_group_planes(s, alpha);
     planes.push_back({ rgb_names("ViewLayer.DiffCol"), &colour });
     planes.push_back({ rgb_names("ViewLayer.DiffDir"), &direct });
     planes.push_back({ rgb_names("ViewLayer.DiffInd"), &indirect });
