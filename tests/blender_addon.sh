@@ -8,15 +8,7 @@
 # be left empty).
 set -euo pipefail
 build_dir=$1 source_dir=$2
-command -v blender >/dev/null || { echo "blender not found (scripts/setup.sh installs it)"; exit 77; }
-scratch=$(mktemp -d)
-trap 'rm -rf "$scratch"' EXIT
-mkdir -p "$scratch/scripts/addons" "$scratch/tmp" "$scratch/work"
-ln -s "$source_dir/share/blender/zdenoise_addon.py" "$scratch/scripts/addons/zdenoise_addon.py"
-export BLENDER_USER_SCRIPTS=$scratch/scripts
-export ZDENOISE_EXECUTABLE=$build_dir/bin/zdenoise
-export TMPDIR=$scratch/tmp
-cd "$scratch/work"
+source "$source_dir/tests/blender_addon_scratch.sh"
 blender=(blender -b --factory-startup -noaudio --python-exit-code 1)
 
 "${blender[@]}" --addons zdenoise_addon -P "$source_dir/tests/blender_addon_test.py" -- "$scratch"

@@ -17,37 +17,16 @@ import bpy
 import numpy as np
 from mathutils import Vector
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from blender_addon_common import check, empty_cycles_scene, fail  # noqa: E402
+
 scratch = sys.argv[sys.argv.index("--") + 1]
 tmp = os.environ["TMPDIR"]
 W = H = 64
 
 
-def fail(message):
-    print(f"FAIL: {message}", flush=True)
-    sys.exit(1)
-
-
-def check(condition, message):
-    if not condition:
-        fail(message)
-    print(f"ok: {message}", flush=True)
-
-
 def build_scene():
-    # (Not read_factory_settings: it would turn the add-on off again.)
-    for ob in list(bpy.data.objects):
-        bpy.data.objects.remove(ob)
-    scene = bpy.context.scene
-    scene.render.engine = "CYCLES"
-    scene.render.resolution_x, scene.render.resolution_y = W, H
-    scene.render.resolution_percentage = 100
-    cy = scene.cycles
-    cy.device = "CPU"
-    cy.samples = 4
-    cy.seed = 7
-    cy.use_adaptive_sampling = False
-    cy.use_denoising = False  # Debian's Blender has no OpenImageDenoise
-    cy.max_bounces = 4
+    scene = empty_cycles_scene(W, H, samples=4, seed=7)
 
     checker = bpy.data.materials.new("checker")
     checker.use_nodes = True
