@@ -11,8 +11,14 @@ mode of --modes and prints, against SCENE_ref.exr (Combined RGB):
 * "tiles worse": the number of 8x8 tiles whose relMSE is above the noisy input's by more
   than 1e-4, and the largest such excess (issue 44's count of regions made worse).
 
+A mode named `default` runs zdenoise with no flags. `--baseline BIN` adds a first column,
+`today`: another build's zdenoise with no flags (the default before a change). `--oidn DIR`
+adds a last column: Intel OIDN 2.4 (--hdr, the file's own albedo and normal, as
+bench/peers.py runs it), and each column's relMSE ratio to it.
+
     bench/path_mode.py --data ../shared/data --data /renders           # every case found
     bench/path_mode.py --data ../shared/data --spp 16 --seeds 1 --scenes zigzag_steps
+    bench/path_mode.py --data RENDERS --modes default --baseline OLD/zdenoise --oidn OIDN_DIR
 
 Runs with Debian's /usr/bin/python3 (OpenImageIO, numpy). Exit 0, or 2 on a setup error.
 """
@@ -80,6 +86,8 @@ def main():
     ap.add_argument("--spp", default="4,16,64")
     ap.add_argument("--seeds", default="1,2")
     ap.add_argument("--scenes", default="")
+    ap.add_argument("--baseline", help="another zdenoise: its no-flags output is the first column")
+    ap.add_argument("--oidn", help="extracted oidn-install directory: adds OIDN's column")
     args = ap.parse_args()
     args.data = args.data or [os.path.join(REPO, "..", "shared", "data")]
     args.spp = [int(s) for s in args.spp.split(",")]
@@ -89,11 +97,22 @@ def main():
     if not os.access(args.zdenoise, os.X_OK):
         print(f"path_mode.py: no zdenoise at {args.zdenoise}", file=sys.stderr)
         return 2
+    runs = ([("today", [args.baseline])] if args.baseline else []) + [
+        (m, [args.zdenoise] + ([] if m == "default" else ["--mode", m])) for m in modes]
     head = ["scene", "spp", "seed"]
-    for m in modes:
-        head += [f"{m} relMSE", "ratio", "sunlit", "tiles worse (max)"]
+    for label, _ in runs:
+        head += [f"{label} relMSE", "ratio", "sunlit", "tiles worse (max)"]
+    if args.oidn:
+        head += ["OIDN relMSE", "sunlit", "tiles worse (max)"] + [
+            f"{label} / OIDN" for label, _ in runs]
     print(" | ".join(head))
     tmp = tempfile.mkdtemp(prefix="zd_path_mode_")
+    peers = None
+    if args.oidn:
+        sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+        import peers as peers_module
+        peers = peers_module.Peers(argparse.Namespace(
+            oidn=args.oidn, shared=os.path.join(REPO, "..", "shared")), tmp)
     for scene, spp, seed, path, ref_path in cases(args):
         ref = rgb(ref_path, "Combined")
         noisy = rgb(path, "Combined")
@@ -104,18 +123,29 @@ def main():
         if direct is not None and colour is not None:
             y = lum(direct * colour)
             sun = y > np.percentile(y, 85)
-        row, first = [scene, str(spp), str(seed)], None
-        for m in modes:
-            out = os.path.join(tmp, f"{m}.exr")
-            subprocess.run([args.zdenoise, "--in", path, "-o", out, "--mode", m],
-                           check=True, stdout=subprocess.DEVNULL)
-            img = rgb(out, "Combined")
-            whole = float(rel_error(img, ref).mean())
+
+        def scores(img):
+            e = rel_error(img, ref)
+            sunlit = float(e[sun].mean()) if sun is not None else float("nan")
+            return float(e.mean()), sunlit, tiles_worse(img, noisy, ref)
+
+        row, first, wholes = [scene, str(spp), str(seed)], None, []
+        for label, cmd in runs:
+            out = os.path.join(tmp, f"{label}.exr")
+            subprocess.run(cmd + ["--in", path, "-o", out], check=True,
+                           stdout=subprocess.DEVNULL)
+            whole, sunlit, (worse, excess) = scores(rgb(out, "Combined"))
             first = first or whole
-            sunlit = float(rel_error(img, ref)[sun].mean()) if sun is not None else float("nan")
-            worse, excess = tiles_worse(img, noisy, ref)
+            wholes.append(whole)
             row += [f"{whole:.5f}", f"{whole / first:.3f}", f"{sunlit:.5f}",
                     f"{worse} ({excess:.3f})"]
+        if peers:
+            out = os.path.join(tmp, "oidn.exr")
+            peers.oidn(path, path, out, False)
+            buf = oiio.ImageBuf(out)
+            whole, sunlit, (worse, excess) = scores(buf.get_pixels(oiio.FLOAT)[..., :3])
+            row += [f"{whole:.5f}", f"{sunlit:.5f}", f"{worse} ({excess:.3f})"]
+            row += [f"{w / whole:.2f}" for w in wholes]
         print(" | ".join(row), flush=True)
     return 0
 

@@ -489,8 +489,9 @@ TEST_F(LightGroupsCli, GroupsAreSplitInEveryModeUnderTransparentFilm)
         EXPECT_NE(res.out.find("light groups fill, key, sky split from the denoised beauty"),
                   std::string::npos)
             << res.out;
-        // In half, the file's beauty and groups add up only to its rounding.
-        expect_groups_denoised_and_adding_up(s, out, kFilm, 0.005);
+        // In half, the file's beauty and groups add up only to its rounding:
+        // four values rounded to 2^-11 of themselves, up to 3x the mean.
+        expect_groups_denoised_and_adding_up(s, out, kFilm, 0.01);
         const ImageBuf beauty = layer_of(out, "Combined");
         float worst = 0.0f;
         for (int y = 0; y < H; ++y)

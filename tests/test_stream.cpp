@@ -267,13 +267,14 @@ TEST_F(StreamTest, StripsOfTiledFilesOffsetWindowsAndLayersAreExact)
         const char* tile;
         const char* around;
     } cases[] = {
-        { "beauty", "", "1", "65" },
-        { "path", " --mode path", "1", "90" },
+        { "beauty", " --mode beauty", "1", "65" },
+        { "path (no flags: the file has DiffDir)", "", "1", "90" },
         { "layers", " --mode layers --aovs -d float", "23", "71" },
         // The layers' colours prefiltered: 5 rows more for the prefilter.
         { "layers, prefiltered colours", " --mode layers --albedo-samples 4", "23", "76" },
-        { "guide file", " --normal:ch=\"Denoising Normal\" " + path("guides.exr"), "50", "65" },
-        { "today's filter", " --select 0", "1", "21" },
+        { "guide file",
+          " --mode beauty --normal:ch=\"Denoising Normal\" " + path("guides.exr"), "50", "65" },
+        { "today's filter", " --mode beauty --select 0", "1", "21" },
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.name);

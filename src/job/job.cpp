@@ -61,8 +61,14 @@ log_mode(const Job& j, const Convention& conv, const Plan& p,
     if (p.layered) {
         log.insert(log.begin() + long(mode_line),
                    p.path ? format("mode path: the direct light apart from "
-                                   "the rest, {} layer(s)",
-                                   p.layers.layers.size())
+                                   "the rest, {} layer(s){}",
+                                   p.layers.layers.size(),
+                                   j.mode == Mode::Auto
+                                       ? " (the default where the render "
+                                         "has its direct light apart; "
+                                         "--mode beauty filters the "
+                                         "beauty as one)"
+                                       : "")
                           : format("mode layers: {} layer(s){}",
                                    p.layers.layers.size(),
                                    j.layers.empty() ? "" : " (--layer)"));
@@ -78,6 +84,10 @@ log_mode(const Job& j, const Convention& conv, const Plan& p,
     log.push_back(found.empty() ? "mode beauty"
                                 : "mode beauty (layers found: " + found
                                       + "; --mode layers uses them)");
+    if (j.mode == Mode::Auto && !conv.direct_layers.empty())
+        log.push_back("  not by path: " + p.path_blocker
+                      + " describes the beauty (--mode path filters the "
+                        "direct light apart all the same)");
     if (!noise_given)
         log.push_back("  noise     estimated from the image");
 }
@@ -120,12 +130,13 @@ plan_roles(Job& j, InputFiles& files, Plan& p, AuxConvention& aux,
             fail(invalid);
     const InputHeader& in = files.header(j.in.path);
     const Convention conv = detect_convention(in.channelnames);
+    p.path_blocker = auto_path_blocker(j);
     std::string remodulation;
     if (j.aux.given)
         apply_aux(j, files, aux, remodulation, result.log);
     apply_defaults(j, conv, result.log);
     apply_file_defaults(j, files);
-    layer_args = choose_layers(j, conv, p.path, p.layered);
+    layer_args = choose_layers(j, conv, p.path_blocker, p.path, p.layered);
     if (!p.layered && !j.albedo.given)
         fail(format("no albedo: '{}' has no Denoising Albedo pass; give "
                     "--albedo FILE or --aux FILE",

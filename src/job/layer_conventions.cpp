@@ -117,21 +117,18 @@ cycles_convention(const std::vector<std::string>& names,
                                  std::string(lobe) != "Diff", lobe });
     }
     // Light by path: the diffuse direct light (a sun's or a small lamp's
-    // hard and thin shadows) apart; the glossy and transmitted light stay
-    // with the indirect light in the residual layer, as in beauty mode.
+    // hard and thin shadows) apart; everything else (the indirect light,
+    // the glossy and transmitted light) stays in the residual layer over
+    // Denoising Albedo, filtered as beauty mode filters the beauty, so that
+    // where the direct light is routed back the result is beauty mode's.
+    // DiffInd as a layer of its own over DiffCol was measured and dropped
+    // (bench/path_mode.md): worse at 4 spp on nine scenes of ten, a third
+    // dearer.
     const std::string diff_dir = pass("DiffDir", "RGB");
     const std::string diff_col = pass("DiffCol", "RGB");
-    const std::string diff_ind = pass("DiffInd", "RGB");
-    if (!diff_dir.empty() && !diff_col.empty() && !c.albedo.empty()) {
+    if (!diff_dir.empty() && !diff_col.empty() && !c.albedo.empty())
         c.direct_layers.push_back({ prefix + "DiffDir", diff_dir, diff_col,
                                     true, false, "Diff", true });
-        // The diffuse indirect light over its own colour, not the residual's
-        // Denoising Albedo: at a leaf's silhouette against the sky that
-        // albedo holds the sky's, and the quotient is neither's light.
-        if (!diff_ind.empty())
-            c.direct_layers.push_back({ prefix + "DiffInd", diff_ind, diff_col,
-                                        true, false, "Diff", false });
-    }
     c.residual_albedo     = c.albedo;
     c.residual_layer      = prefix + "Residual";
     c.residual_unfiltered = pass("Env", "RGB");

@@ -128,14 +128,41 @@ pair_direct_layers(LayersPlan& plan, const std::vector<LayerArg>& args)
 }  // namespace
 
 
+std::string
+auto_path_blocker(const Job& j)
+{
+    const struct {
+        bool given;
+        const char* option;
+    } beauty_options[] = {
+        { j.mode != Mode::Auto, "--mode" },
+        { !j.layers.empty(), "--layer" },
+        { j.albedo.given, "--albedo" },
+        { j.aux.given, "--aux" },
+        { j.variance.given, "--variance" },
+        { j.half_a.given || j.half_b.given, "--halves" },
+        { j.temporal > 0, "--temporal" },
+        // Layers are filtered in the input's colour space (plan_colour()).
+        { j.colour.any_given(), "a colour space or config" },
+    };
+    for (const auto& o : beauty_options)
+        if (o.given)
+            return o.option;
+    return "";
+}
+
+
 const std::vector<LayerArg>&
-choose_layers(const Job& j, const Convention& conv, bool& path, bool& layered)
+choose_layers(const Job& j, const Convention& conv,
+              const std::string& auto_path_blocker, bool& path, bool& layered)
 {
     if (j.mode == Mode::Path && conv.direct_layers.empty())
         fail(format("--mode path: '{}' has no direct light pass apart (Cycles' "
                     "DiffDir with DiffCol and Denoising Albedo; docs/LAYERS.md)",
                     j.in.path));
-    path = j.mode == Mode::Path;
+    path = j.mode == Mode::Path
+           || (j.mode == Mode::Auto && auto_path_blocker.empty()
+               && !conv.direct_layers.empty());
     const std::vector<LayerArg>& layer_args
         = path ? conv.direct_layers : (j.layers.empty() ? conv.layers : j.layers);
     if (j.mode == Mode::Layers && layer_args.empty())
@@ -485,6 +512,40 @@ drop_where_transparent(ImageBuf& unfiltered, const ImageBuf& beauty)
 }
 
 
+/// The beauty's alpha into `residual`'s fourth channel, when it has one.
+/// Through get/set_pixels: the beauty may be the file's half rows.
+static bool
+copy_alpha(ImageBuf& residual, const ImageBuf& beauty)
+{
+    if (residual.nchannels() < 4)
+        return true;
+    ROI a    = residual.roi();
+    a.chbegin = 3;
+    a.chend   = 4;
+    std::vector<float> alpha(a.npixels());
+    return beauty.get_pixels(a, TypeFloat, alpha.data())
+           && residual.set_pixels(a, TypeFloat, alpha.data());
+}
+
+
+/// The residual's image over `rgb`: RGB, and the beauty's alpha when the
+/// residual is a layer to filter and the beauty has one. The filter reads
+/// an alpha of 0 as no surface, as it does the beauty's in beauty mode, so
+/// that under transparent film the holes are left as they are, not filled
+/// with their neighbours' light. (An unfiltered residual stays RGB.)
+static ImageSpec
+residual_spec(const ROI& rgb, const ImageBuf& beauty, bool filtered)
+{
+    ROI kept = rgb;
+    if (filtered && beauty.nchannels() >= 4)
+        kept.chend = 4;
+    ImageSpec spec(kept, TypeFloat);
+    if (kept.chend == 4)
+        spec.alpha_channel = 3;
+    return spec;
+}
+
+
 /// Read the strip's layers and residual as `plan` says.
 std::vector<Layer>
 load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
@@ -541,14 +602,13 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
         ROI rgb     = beauty.roi();
         rgb.chbegin = 0;
         rgb.chend   = 3;
-        // RGB only: the beauty's alpha would mark the residual's pixels
-        // "no surface" for the filter.
-        l.residual.reset(ImageSpec(rgb, TypeFloat));
+        l.residual.reset(residual_spec(rgb, beauty, plan.residual_is_layer));
         FilterOptions sum_options = j.filter;
         sum_options.progress      = nullptr;
         if (!layered_denoise(sum, unfiltered, nullptr, {}, sum_options,
                              nullptr, rgb, j.threads)
-            || !ImageBufAlgo::sub(l.residual, beauty, sum, rgb, j.threads))
+            || !ImageBufAlgo::sub(l.residual, beauty, sum, rgb, j.threads)
+            || !copy_alpha(l.residual, beauty))
             fail(format("layers of '{}': {}", j.in.path,
                         one_line(sum.has_error() ? sum.geterror()
                                                  : l.residual.geterror())));
@@ -560,7 +620,9 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
     if (!plan.residual_unfiltered.empty()) {
         l.residual = strip.sum(plan.residual_unfiltered);
         drop_where_transparent(l.residual, beauty);
-        if (!ImageBufAlgo::sub(l.radiance[i], l.radiance[i], l.residual, {},
+        ROI rgb    = l.residual.roi();
+        rgb.chend  = 3;
+        if (!ImageBufAlgo::sub(l.radiance[i], l.radiance[i], l.residual, rgb,
                                j.threads))
             fail(format("layers of '{}': {}", j.in.path,
                         one_line(l.radiance[i].geterror())));

@@ -73,12 +73,21 @@ struct LayersPlan {
 
 /// Which layers job `j` filters, and whether it is layered and by path:
 /// the convention's direct layers in path mode, else the user's (--layer)
-/// or the convention's. Fails, naming the file, when the mode asks for
-/// layers the file does not have. Path mode is not the default yet: on ten
-/// scenes it is worse than beauty mode on some (docs/LAYERS.md "Light by
-/// path").
+/// or the convention's. With no --mode, path mode where the file has the
+/// direct light apart and `auto_path_blocker` (what the user asked for
+/// that path mode does not do, auto_path_blocker()) is empty; else beauty
+/// mode, or layers mode with --layer. Fails, naming the file, when the
+/// mode asks for layers the file does not have.
 const std::vector<LayerArg>&
-choose_layers(const Job& j, const Convention& conv, bool& path, bool& layered);
+choose_layers(const Job& j, const Convention& conv,
+              const std::string& auto_path_blocker, bool& path, bool& layered);
+
+/// Why job `j`, as the user gave it (before the convention's defaults),
+/// is not filtered by path when no --mode is given: an option whose
+/// meaning is the beauty's (--albedo, --aux, --variance, --halves,
+/// --temporal, --layer, a colour space); empty when none is given.
+std::string
+auto_path_blocker(const Job& j);
 
 /// Choose the layers and the residual; the residual is, unless selected,
 /// the beauty minus the sum of the unfiltered layers, so that nothing of

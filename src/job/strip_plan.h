@@ -35,6 +35,9 @@ struct Plan {
     /// Light by path (--mode path, or its default): layered, with the
     /// direct light as its layers (Convention::direct_layers).
     bool path = false;
+    /// With no --mode: the option that keeps the file from being filtered
+    /// by path (auto_path_blocker()); empty when none does.
+    std::string path_blocker;
     OIIO::ROI noisy;  ///< the --in file's pixels
     RoleSelections roles;
     colour::ColourConfig config;
