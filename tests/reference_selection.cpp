@@ -251,15 +251,18 @@ feature_regression(const RefImage& z, const RefImage& albedo, const RefImage& pi
 
 RefImage
 sure_risk(const RefImage& candidate, const RefImage& z, const RefImage& variance,
-          const RefImage& weight)
+          const RefImage& weight, double clip_sigmas)
 {
     RefImage out(z.w, z.h, 1);
     for (int y = 0; y < z.h; ++y)
         for (int x = 0; x < z.w; ++x) {
-            const double e   = luma(candidate, x, y) - luma(z, x, y);
-            const double v   = variance.at(x, y, 0);
-            const double r   = weight.at(x, y, 0) * (e * e - v + 2.0 * v * candidate.at(x, y, 3));
-            out.at(x, y, 0) = v > 0.0 && std::isfinite(r) ? float(r) : NAN;
+            const double e = luma(candidate, x, y) - luma(z, x, y);
+            const double v = variance.at(x, y, 0);
+            double e2      = e * e;
+            if (clip_sigmas > 0.0 && v > 0.0 && e2 > clip_sigmas * clip_sigmas * v)
+                e2 = clip_sigmas * clip_sigmas * v;
+            const double r  = weight.at(x, y, 0) * (e2 - v + 2.0 * v * candidate.at(x, y, 3));
+            out.at(x, y, 0) = v >= 0.0 && std::isfinite(r) ? float(r) : NAN;
         }
     return out;
 }

@@ -28,9 +28,11 @@ RefImage feature_regression(const RefImage& z, const RefImage& albedo,
                             const zdenoise::FeatureRegressionOptions& options);
 
 /// Section 13.3: weight * [(out_l - z_l)^2 - var + 2 var D], NaN without
-/// an observation (var not > 0 or the value not finite).
+/// an observation (var negative or the value not finite); with
+/// clip_sigmas > 0 the squared difference is at most clip_sigmas^2 var.
 RefImage sure_risk(const RefImage& candidate, const RefImage& z,
-                   const RefImage& variance, const RefImage& weight);
+                   const RefImage& variance, const RefImage& weight,
+                   double clip_sigmas = 0.0);
 
 /// Section 13.4: the blend of the candidates' R, G, B by the smoothed
 /// choice map; `weights`, if not null, receives one channel per candidate.

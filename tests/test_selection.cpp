@@ -411,6 +411,51 @@ TEST(SureRisk, MeanIsTheTrueErrorOfALinearFilter)
     }
 }
 
+// The winsorized risk (clip_sigmas, as the selection runs it): a 1-px dark
+// line every 8 rows, 8 noise deviations deep, which a wide box fills in.
+// Each line pixel's squared difference is clipped at 4 deviations for both
+// candidates, yet the wide one still pays for filling it in: the selection
+// keeps the narrow filter on the lines (before, such pixels had no
+// observation). A noise-free pixel (variance 0) is an observation, its
+// exact squared error. The library matches the reference.
+TEST(SureRisk, WinsorizedRiskStillChargesTheFilterThatFillsInALine)
+{
+    const int w = 64, h = 64;
+    const double sigma = 0.05;
+    RefImage clean;
+    const RefImage z = noisy_plane(w, h, sigma, 5, [](int, int y) {
+        return y % 8 == 4 ? 1.0 - 8 * 0.05 : 1.0;
+    }, &clean);
+    const RefImage narrow = box_candidate(z, 0), wide = box_candidate(z, 3);
+    RefImage var = constant(w, h, float(sigma * sigma));
+    const RefImage one = constant(w, h, 1.0f);
+    const RefImage r0 = zdenoise_ref::sure_risk(narrow, z, var, one, 4.0);
+    const RefImage r1 = zdenoise_ref::sure_risk(wide, z, var, one, 4.0);
+    for (const RefImage* r : { &r0, &r1 }) {
+        ImageBuf lib;
+        ASSERT_TRUE(zdenoise::sure_risk(lib, zdenoise_ref::to_imagebuf(r == &r0 ? narrow : wide),
+                                        zdenoise_ref::to_imagebuf(z),
+                                        zdenoise_ref::to_imagebuf(var),
+                                        zdenoise_ref::to_imagebuf(one), 4.0f));
+        EXPECT_LT(max_difference(zdenoise_ref::from_imagebuf(lib), *r, 1, 1e-3), 1e-4);
+    }
+    zdenoise::SelectionOptions o;
+    RefImage weights;
+    zdenoise_ref::select_by_risk({ &narrow, &wide }, { &r0, &r1 }, o, &weights);
+    double narrow_on_lines = 0.0;
+    int n = 0;
+    for (int y = 12; y < h - 12; y += 8)
+        for (int x = 12; x < w - 12; ++x, ++n)
+            narrow_on_lines += weights.at(x, y, 0);
+    EXPECT_GT(narrow_on_lines / n, 0.9) << "the lines keep the filter that keeps them";
+    // Noise-free: the risk is the squared error, not "no observation".
+    var.at(7, 9, 0) = 0.0f;
+    const RefImage exact = zdenoise_ref::sure_risk(wide, z, var, one, 4.0);
+    const double e = luma(wide, 7, 9) - luma(z, 7, 9);
+    EXPECT_NEAR(exact.at(7, 9, 0), e * e, 1e-6);
+}
+
+
 // With two independent halves, the cross risk's mean is the true error of
 // a half's filter plus the half's noise variance, common to every filter:
 // no noise estimate needed to rank them.

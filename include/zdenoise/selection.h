@@ -90,16 +90,26 @@ ZDENOISE_API int feature_regression_halo(const FeatureRegressionOptions& options
 /// diagonal D and the noise of z is independent between pixels.
 ///
 /// @param dst        1 channel; NaN where there is no observation
-///                   (variance not > 0, or a value not finite).
+///                   (variance negative or not finite, or a value not
+///                   finite). A noise-free pixel (variance 0) is an
+///                   observation: its risk is its exact squared error.
 /// @param candidate  The candidate's output: R, G, B and D in channel 3.
 /// @param quotient   The noisy z it filtered, channels 0-2.
 /// @param variance   Channel 0: the variance of z_l at each pixel.
 /// @param weight     Channel 0: the metric's weight of the pixel (e.g. the
 ///                   relative-MSE weight, FILTER.md 13.3).
+/// @param clip_sigmas  When > 0, (out_l - z_l)^2 is taken at most
+///                   clip_sigmas^2 var (winsorized): a pixel that every
+///                   candidate departs from by more (a firefly) weighs
+///                   alike in each candidate's risk instead of deciding
+///                   its neighbourhood, while one candidate that departs
+///                   from a pixel the others keep (a thin shadow filled
+///                   in) still pays for it. Biased low where a candidate
+///                   truly departs by more; 0: the unbiased estimate.
 ZDENOISE_API bool sure_risk(ImageBuf& dst, const ImageBuf& candidate,
                             const ImageBuf& quotient, const ImageBuf& variance,
-                            const ImageBuf& weight, ROI roi = {},
-                            int nthreads = 0);
+                            const ImageBuf& weight, float clip_sigmas = 0.0f,
+                            ROI roi = {}, int nthreads = 0);
 
 /// The same risk from two independent half renders (docs/FILTER.md section
 /// 13.3): weight * [(F(A)_l - z_B,l)^2 + (F(B)_l - z_A,l)^2] / 2, where F(A)

@@ -248,10 +248,16 @@ blend_candidates(ImageBuf& dst, ImageBuf* weights,
 
 bool
 sure_risk(ImageBuf& dst, const ImageBuf& candidate, const ImageBuf& quotient,
-          const ImageBuf& variance, const ImageBuf& weight, ROI roi,
-          int nthreads)
+          const ImageBuf& variance, const ImageBuf& weight, float clip_sigmas,
+          ROI roi, int nthreads)
 {
     const char* opname = "sure_risk";
+    if (!(clip_sigmas >= 0.0f) || !std::isfinite(clip_sigmas)) {
+        dst.errorfmt("sure_risk: clip_sigmas must be 0 or more, got {}",
+                     clip_sigmas);
+        return false;
+    }
+    const double clip2 = double(clip_sigmas) * double(clip_sigmas);
     if (!roi.defined())
         roi = candidate.roi();
     if (!detail::check_input(dst, candidate, opname, "candidate", roi, 4)
@@ -267,8 +273,11 @@ sure_risk(ImageBuf& dst, const ImageBuf& candidate, const ImageBuf& quotient,
         parallel_for(int64_t(0), int64_t(out.size()), [&](int64_t i) {
             const double e   = double(detail::luminance(&c[4 * i])) - detail::luminance(&z[3 * i]);
             const double var = v[size_t(i)];
-            const double r   = w[size_t(i)] * (e * e - var + 2.0 * var * c[4 * i + 3]);
-            out[size_t(i)]   = var > 0.0 && std::isfinite(r) ? float(r) : NAN;
+            // Noise-free (var 0): the exact squared error, never clipped.
+            const double e2  = clip2 > 0.0 && var > 0.0 ? std::min(e * e, clip2 * var)
+                                                        : e * e;
+            const double r   = w[size_t(i)] * (e2 - var + 2.0 * var * c[4 * i + 3]);
+            out[size_t(i)]   = var >= 0.0 && std::isfinite(r) ? float(r) : NAN;
         }, detail::paropt_any_length(nthreads));
     });
 }

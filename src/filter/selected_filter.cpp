@@ -76,8 +76,11 @@ constexpr float kBoundMargin = 2.0f;
 /// the light, so pixels of similar light have similar noise.
 constexpr float kLightRatio = 2.0f;
 
-/// Outliers are left out of the risk averages (of every candidate alike):
-/// a firefly's own squared error would decide its whole neighbourhood.
+/// Squared differences beyond this many noise deviations are winsorized
+/// in every candidate's risk (sure_risk()'s clip_sigmas): a firefly's own
+/// squared error would decide its whole neighbourhood, while a candidate
+/// that fills in a thin shadow the others keep must still pay for it. The
+/// same bound leaves outliers out of residual_bounded_variance().
 constexpr float kOutlierSigmas = 4.0f;
 
 /// Store `v` (all of img's channels a pixel) over the pixels of r.
@@ -555,8 +558,11 @@ risk_inputs(const Selection& S, const Candidate0& c0)
             c0v[4 * k + 3] = c0.d0_k0[size_t(y - k0reg.ybegin) * size_t(k0reg.width())
                                       + size_t(x - k0reg.xbegin)];
             const float o_l = luminance(&c0.o0[3 * i]);
-            const bool outlier = std::fabs(luminance(&z[3 * k]) - o_l)
-                                 > kOutlierSigmas * c0.s[i];
+            // The halves' risk has no noise level to winsorize at: there an
+            // outlier is left out (no observation), as its weight says.
+            const bool outlier = S.halves
+                                 && std::fabs(luminance(&z[3 * k]) - o_l)
+                                        > kOutlierSigmas * c0.s[i];
             v[k] = outlier ? 0.0f : S.halves ? c0.s[i] * c0.s[i] : c0.sigma2[i];
             // relMSE (x - ref)^2 / (ref^2 + 0.01) in radiance, written
             // in z: radiance = z (a + albedo_eps).
@@ -590,12 +596,12 @@ candidate_risks(const Selection& S, const RiskInputs& in, const HalvesRun& h,
                              in.weight, sel, S.nthreads))
                 return S.fail(risk1[f]);
     } else {
-        if (!sure_risk(risk0, in.cand0, S.quotient, in.var, in.weight, sel,
-                       S.nthreads))
+        if (!sure_risk(risk0, in.cand0, S.quotient, in.var, in.weight,
+                       kOutlierSigmas, sel, S.nthreads))
             return S.fail(risk0);
         for (size_t f = 0; f < out1.size(); ++f)
-            if (!sure_risk(risk1[f], out1[f], S.quotient, in.var, in.weight, sel,
-                           S.nthreads))
+            if (!sure_risk(risk1[f], out1[f], S.quotient, in.var, in.weight,
+                           kOutlierSigmas, sel, S.nthreads))
                 return S.fail(risk1[f]);
     }
     return true;
