@@ -110,21 +110,6 @@ mask_negligible_residual(ImageBuf& albedo, const ImageBuf& residual,
 }
 
 
-/// Each direct layer's partner: the same lobe's indirect light, a divided
-/// layer of the lobe that is not direct (LayersPlan::One::partner).
-void
-pair_direct_layers(LayersPlan& plan, const std::vector<LayerArg>& args)
-{
-    for (size_t k = 0; k < args.size(); ++k)
-        for (size_t m = 0; args[k].direct && m < args.size(); ++m)
-            if (!args[m].direct && args[m].divided && !args[m].lobe.empty()
-                && args[m].lobe == args[k].lobe) {
-                plan.layers[k].partner      = int(m);
-                plan.layers[m].takes_direct = true;
-                break;
-            }
-}
-
 }  // namespace
 
 
@@ -210,7 +195,6 @@ plan_layers(InputFiles& files, const Job& j,
                                         "kept)"
                                       : ""));
     }
-    pair_direct_layers(plan, args);
     std::string shown_residual = "the beauty minus the layers";
     if (!residual.empty()) {
         shown_residual.clear();
@@ -414,31 +398,26 @@ luminance_plane(const std::vector<float>& rgb)
 
 
 /// Light by path keeps the direct light apart only where it is cleaner
-/// than the rest of the light: its relative noise, sqrt(V) over its level,
-/// both pooled over the 17x17 (V from noise_variance()), below the rest's.
-/// The rest is the same lobe's indirect light over the same colour when
-/// there is such a layer (`partner`), else the residual. Elsewhere (a
-/// sky's light through a window, found by few samples) splitting leaves two
-/// noisier images to filter instead of one, and the direct light goes to
-/// the rest. The share kept apart is that decision's 17x17 mean, so that
-/// neither image takes a seam where it changes: the direct quotient is
-/// scaled by it, and what it loses is added to the rest.
+/// than the rest of the light (the residual): its relative noise, sqrt(V)
+/// over its level, both pooled over the 17x17 (V from noise_variance()),
+/// below the residual's. Elsewhere (a sky's light through a window, found
+/// by few samples) splitting leaves two noisier images to filter instead
+/// of one, and the direct light goes to the residual. The share kept apart
+/// is that decision's 17x17 mean, so that neither image takes a seam where
+/// it changes: the direct quotient is scaled by it, and what it loses is
+/// added to the residual as light.
 void
 route_direct_light(ImageBuf& quotient, const ImageBuf& colour,
-                   ImageBuf& residual, ImageBuf* partner, const Job& j,
-                   const std::string& name)
+                   ImageBuf& residual, const Job& j, const std::string& name)
 {
-    ImageBuf direct, rest, v_direct, v_rest;
+    ImageBuf direct, v_direct, v_rest;
     const ROI all = quotient.roi();
     if (!ImageBufAlgo::mul(direct, quotient, colour, {}, j.threads)
-        || (partner && !ImageBufAlgo::mul(rest, *partner, colour, {}, j.threads))
         || !noise_variance(v_direct, direct, {}, all, all, j.threads)
-        || !noise_variance(v_rest, partner ? rest : residual, {}, all, all,
-                           j.threads))
+        || !noise_variance(v_rest, residual, {}, all, all, j.threads))
         fail(format("layer '{}' of '{}': {}", name, j.in.path,
                     one_line(direct.geterror() + v_direct.geterror()
                              + v_rest.geterror())));
-    ImageBuf& target = partner ? *partner : residual;
     const int w = all.width(), h = all.height();
     const size_t n = size_t(w) * size_t(h);
     ROI rgb    = all;
@@ -449,12 +428,8 @@ route_direct_light(ImageBuf& quotient, const ImageBuf& colour,
     one.chend   = 1;
     std::vector<float> d(3 * n), o(3 * n), q(3 * n), vd(n), vo(n);
     direct.get_pixels(rgb, TypeFloat, d.data());
-    (partner ? rest : residual).get_pixels(rgb, TypeFloat, o.data());
+    residual.get_pixels(rgb, TypeFloat, o.data());
     quotient.get_pixels(rgb, TypeFloat, q.data());
-    // The target's pixels: the residual's are `o` already.
-    std::vector<float> r = o;
-    if (partner)
-        partner->get_pixels(rgb, TypeFloat, r.data());
     v_direct.get_pixels(one, TypeFloat, vd.data());
     v_rest.get_pixels(one, TypeFloat, vo.data());
     const std::vector<float> yd = box_mean(luminance_plane(d), w, h, kPool);
@@ -465,16 +440,13 @@ route_direct_light(ImageBuf& quotient, const ImageBuf& colour,
     for (size_t i = 0; i < n; ++i)
         cleaner[i] = pd[i] * yo[i] * yo[i] < po[i] * yd[i] * yd[i] ? 1.0f : 0.0f;
     const std::vector<float> share = box_mean(cleaner, w, h, kPool);
-    // Into the partner as the quotient it is (the same colour divides
-    // both), into the residual as light.
-    const std::vector<float>& moved = partner ? q : d;
     for (size_t i = 0; i < n; ++i)
         for (int c = 0; c < 3; ++c) {
-            r[3 * i + size_t(c)] += (1.0f - share[i]) * moved[3 * i + size_t(c)];
+            o[3 * i + size_t(c)] += (1.0f - share[i]) * d[3 * i + size_t(c)];
             q[3 * i + size_t(c)] *= share[i];
         }
     quotient.set_pixels(rgb, TypeFloat, q.data());
-    target.set_pixels(rgb, TypeFloat, r.data());
+    residual.set_pixels(rgb, TypeFloat, o.data());
 }
 
 }  // namespace
@@ -563,10 +535,10 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
     for (size_t i = 0; i < n; ++i) {
         const LayersPlan::One& one = plan.layers[i];
         // divide_through_specular() writes a lobe's light and colour,
-        // route_direct_light() a direct layer's light and its partner's,
+        // route_direct_light() a direct layer's light and the residual's,
         // and the mask below the residual layer's albedo: copies of their
         // own.
-        const bool read_only = one.diffuse < 0 && !one.direct && !one.takes_direct;
+        const bool read_only = one.diffuse < 0 && !one.direct;
         if (i < given)
             l.radiance[i] = strip.sum(one.radiance, read_only);
         l.albedo[i]         = strip.sum(one.albedo, i < given && read_only);
@@ -635,12 +607,9 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
                                     l.albedo[i], j.filter.albedo_eps,
                                     j.threads);
     for (size_t k = 0; k < given; ++k)
-        if (plan.layers[k].direct) {
-            const int m = plan.layers[k].partner;
-            route_direct_light(l.radiance[k], l.albedo[k], l.radiance[i],
-                               m >= 0 ? &l.radiance[size_t(m)] : nullptr, j,
+        if (plan.layers[k].direct)
+            route_direct_light(l.radiance[k], l.albedo[k], l.radiance[i], j,
                                plan.layers[k].name);
-        }
     // The mask reads float images; the beauty may be the file's half rows.
     const ImageBuf beauty_float = beauty.spec().format == TypeFloat
                                       ? ImageBuf()

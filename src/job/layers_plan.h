@@ -33,16 +33,9 @@ struct LayersPlan {
         /// A cleaner colour of the layer (the --aux file's), or none.
         std::vector<Selection> remodulation;
         bool divided = false, reflected = false;
-        /// Direct light (zdenoise::Layer::direct).
+        /// Direct light (zdenoise::Layer::direct); where it is not kept
+        /// apart the residual layer takes it (route_direct_light()).
         bool direct = false;
-        /// A direct layer: the index in `layers` of the same lobe's
-        /// indirect light (a divided layer of that lobe), which takes the
-        /// direct light where it is not kept apart (route_direct_light());
-        /// -1: none, the residual takes it.
-        int partner = -1;
-        /// The partner of a direct layer: route_direct_light() writes its
-        /// light.
-        bool takes_direct = false;
         /// Samples a pixel of its colour, the render's own AOV, which
         /// load_layers() prefilters (plan_layer_colours()); 0: as it is.
         int prefilter = 0;
