@@ -7,7 +7,7 @@ render properties; docs/BLENDER.md has the details.
 After each render (each frame of an animation, in the UI and with `blender -b ... -f N` or
 `-a`) it saves the Render Result as a multilayer float EXR in a temporary folder, runs
 
-    zdenoise --in render.exr -o denoised.exr [--mode layers] [--aux aux.exr]
+    zdenoise --in render.exr -o denoised.exr --mode path|beauty|layers [--aux aux.exr]
 
 on it, and loads the denoised beauty of the view layer into the image "zdenoise" (its pixels
 in memory and packed, so nothing refers to the temporary folder), which every open Image
@@ -190,14 +190,14 @@ class ZDENOISE_SceneSettings(bpy.types.PropertyGroup):
         name="Mode",
         description="zdenoise --mode",
         items=(
-            ("beauty", "Beauty", "Denoise the beauty (Combined) with the albedo"),
             ("path", "Light by path", "Filter the diffuse direct light apart from the rest, "
-                                      "keeping hard and thin shadows (turns on the Diffuse "
-                                      "Direct and Color passes)"),
+                                      "keeping hard and thin shadows (zdenoise's default; "
+                                      "turns on the Diffuse Direct and Color passes)"),
+            ("beauty", "Beauty", "Denoise the beauty (Combined) as one, with the albedo"),
             ("layers", "Layers", "Denoise each lobe (diffuse, glossy, transmission) with its "
                                  "own colour and add the rest (turns on the lobe passes)"),
         ),
-        default="beauty",
+        default="path",
         update=_enable_update,
     )
     compositor_nodes: BoolProperty(
@@ -675,8 +675,8 @@ def run(job):
         if job.output:
             os.makedirs(os.path.dirname(job.output) or ".", exist_ok=True)
         command = [job.executable, "--in", job.render, "-o", job.denoised]
-        if job.mode != "beauty":
-            command += ["--mode", job.mode]
+        # Always named: zdenoise's own default depends on the passes and options.
+        command += ["--mode", job.mode]
         if job.aux:
             command += ["--aux", job.aux]
         p = _run(command)

@@ -258,10 +258,13 @@ options()
           "kept (hard and thin shadows);\n"
           "'layers': denoise each layer (lobe or specular depth)\n"
           "with its own albedo, add the residual;\n"
-          "'beauty': denoise the beauty with the albedo. Default:\n"
-          "layers when --layer is given, else beauty. Each is\n"
-          "better on some scenes and worse on others; measured in\n"
-          "docs/LAYERS.md." },
+          "'beauty': denoise the beauty with the albedo as one.\n"
+          "Default: path where the render has its direct light\n"
+          "apart (Cycles' DiffDir and DiffCol) and no option\n"
+          "describes the beauty (--albedo, --aux, --variance,\n"
+          "--halves, --temporal, a colour space); layers when\n"
+          "--layer is given; else beauty. Measured on ten scenes\n"
+          "in docs/LAYERS.md." },
         not_in_file_name({ Kind::Layers, "--layer", "layers", FIELD(job.layers), "NAME=RADIANCE:ALBEDO[:divided][:reflected]",
           "A layer of the --in file (repeatable; replaces the\n"
           "detected layers). RADIANCE and ALBEDO are channel\n"
