@@ -359,10 +359,12 @@ is_sky(int x, int y)
 /// smooth bounce light at 100 % noise, a checker DiffCol; Combined their
 /// composition. `with_sky`: is_sky()'s pixels are a noise-free sky as
 /// Cycles writes it (Combined = Env = Denoising Albedo, a gradient; no
-/// depth, no normal, no lobe light). Writes it and returns the clean
-/// Combined.
+/// depth, no normal, no lobe light). `arnold`: the same light as Arnold
+/// writes it (R,G,B, albedo, N, Z, diffuse_direct and diffuse_indirect as
+/// radiance over diffuse_albedo), with no sky. Writes it and returns the
+/// clean beauty.
 ImageBuf
-write_sunlit_floor(const std::string& file, bool with_sky = false)
+write_sunlit_floor(const std::string& file, bool with_sky = false, bool arnold = false)
 {
     std::mt19937 rng(11);
     std::normal_distribution<float> n(0.0f, 1.0f);
@@ -377,8 +379,14 @@ write_sunlit_floor(const std::string& file, bool with_sky = false)
         "ViewLayer.Env.R",              "ViewLayer.Env.G",              "ViewLayer.Env.B",
         "ViewLayer.Denoising Depth.Z"
     };
-    ImageSpec spec(W, H, int(names.size()), TypeFloat);
-    spec.channelnames  = names;
+    const std::vector<std::string> arnold_names = {
+        "R", "G", "B", "albedo.R", "albedo.G", "albedo.B", "N.X", "N.Y", "N.Z",
+        "diffuse_albedo.R", "diffuse_albedo.G", "diffuse_albedo.B",
+        "diffuse_direct.R", "diffuse_direct.G", "diffuse_direct.B",
+        "diffuse_indirect.R", "diffuse_indirect.G", "diffuse_indirect.B", "Z"
+    };
+    ImageSpec spec(W, H, int((arnold ? arnold_names : names).size()), TypeFloat);
+    spec.channelnames  = arnold ? arnold_names : names;
     spec.alpha_channel = -1;
     spec.attribute("cycles.ViewLayer.samples", "16");
     ImageBuf img(spec), clean(ImageSpec(W, H, 3, TypeFloat));
@@ -398,6 +406,10 @@ write_sunlit_floor(const std::string& file, bool with_sky = false)
                 px = { r, g, b, r, g, b, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, r, g, b, 0 };
                 c[0] = r, c[1] = g, c[2] = b;
             }
+            if (arnold)
+                px = { col * (dir + ind), col * (dir + ind), col * (dir + ind), col, col, col,
+                       0.0f, 1.0f, 0.0f, col, col, col, col * dir, col * dir, col * dir,
+                       col * ind, col * ind, col * ind, 5.0f };
             img.setpixel(x, y, px.data(), int(px.size()));
             clean.setpixel(x, y, c, 3);
         }
@@ -405,13 +417,13 @@ write_sunlit_floor(const std::string& file, bool with_sky = false)
     return clean;
 }
 
-/// Combined RGB of a zdenoise output.
+/// Combined RGB of a zdenoise output (`red`: the beauty's first channel).
 ImageBuf
-combined(const std::string& file)
+combined(const std::string& file, const std::string& red = "ViewLayer.Combined.R")
 {
     ImageBuf out(file);
     EXPECT_TRUE(out.read(0, 0, true, TypeFloat)) << out.geterror();
-    const int c = out.spec().channelindex("ViewLayer.Combined.R");
+    const int c = out.spec().channelindex(red);
     ImageBuf rgb;
     ImageBufAlgo::channels(rgb, out, 3, { c, c + 1, c + 2 });
     return rgb;
@@ -454,6 +466,46 @@ TEST_F(PathCli, ThinShadowLinesAreKeptWhileTheBounceLightIsSmoothed)
     EXPECT_GT(contrast(out, 24, 2), 0.9f) << "2-px line";
     EXPECT_GT(contrast(out, 12, 1), contrast(beauty, 12, 1));
     // The frame: much better than the input, and than beauty mode.
+    const double e_noisy = synth::rel_mse(noisy, clean), e_path = synth::rel_mse(out, clean);
+    EXPECT_LT(e_path * 10.0, e_noisy);
+    EXPECT_LT(e_path, synth::rel_mse(beauty, clean));
+}
+
+
+// The same sunlit floor as Arnold writes it (diffuse_direct and
+// diffuse_indirect as radiance over diffuse_albedo, the albedo AOV): no
+// flags filters the direct light apart there too, keeps the lines, and is
+// better than beauty mode.
+TEST_F(PathCli, ArnoldDirectLightIsFilteredApartWithNoFlags)
+{
+    const ImageBuf clean = write_sunlit_floor(path("arnold.exr"), false, true);
+    const cli_test::RunResult res
+        = run("--in " + path("arnold.exr") + " -o " + path("path.exr") + " -v");
+    ASSERT_EQ(res.status, 0) << res.err;
+    for (const char* needle : { "mode path: the direct light apart from the rest, 2 layer(s)",
+                                "layer     diffuse_direct: diffuse_direct.R",
+                                "with albedo diffuse_albedo.R",
+                                "layer     Residual: the beauty minus the layers with albedo "
+                                "albedo.R" })
+        EXPECT_NE(res.out.find(needle), std::string::npos) << "-v lacks '" << needle << "':\n"
+                                                           << res.out;
+    ASSERT_EQ(run("--in " + path("arnold.exr") + " -o " + path("beauty.exr") + " --mode beauty")
+                  .status,
+              0);
+    const ImageBuf out = combined(path("path.exr"), "R");
+    const ImageBuf beauty = combined(path("beauty.exr"), "R");
+    const ImageBuf noisy = combined(path("arnold.exr"), "R");
+    auto contrast = [&](const ImageBuf& img, int y) {
+        float lit = 0.0f, line = 0.0f, truth_lit = 0.0f, truth_line = 0.0f;
+        for (int x = 4; x < 40; ++x) {
+            line += lum(img, x, y);
+            truth_line += lum(clean, x, y);
+            lit += lum(img, x, y - 4);
+            truth_lit += lum(clean, x, y - 4);
+        }
+        return (lit - line) / (truth_lit - truth_line);
+    };
+    EXPECT_GT(contrast(out, 12), 0.9f) << "1-px line";
     const double e_noisy = synth::rel_mse(noisy, clean), e_path = synth::rel_mse(out, clean);
     EXPECT_LT(e_path * 10.0, e_noisy);
     EXPECT_LT(e_path, synth::rel_mse(beauty, clean));

@@ -230,9 +230,15 @@ plan_light(const Job& j, InputFiles& files, const Convention& conv,
         const bool own = !j.residual.empty() || !j.layers.empty();
         const std::string residual = j.residual.empty() ? conv.residual
                                                         : j.residual;
+        // By path the residual is the beauty minus the direct light, over
+        // the beauty's albedo (Cycles' residual albedo is that too).
         p.layers = plan_layers(
-            files, j, layer_args, residual,
-            own ? std::string() : conv.residual_albedo, conv.residual_layer,
+            files, j, layer_args, p.path && !own ? std::string() : residual,
+            own        ? std::string()
+            : p.path   ? conv.albedo
+                       : conv.residual_albedo,
+            conv.residual_layer.empty() ? std::string("Residual")
+                                        : conv.residual_layer,
             // Path mode keeps the environment in the residual, as beauty
             // mode does: at a silhouette against the sky the residual's
             // albedo holds the sky's, and without the sky's light the

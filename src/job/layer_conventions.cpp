@@ -185,6 +185,13 @@ aov_convention(const std::vector<std::string>& names)
     if (has_layer(names, "residual", "RGB"))
         c.residual = "residual";
     aov_passes(names, c);
+    // Light by path: the diffuse direct light apart, as radiance over its
+    // albedo (Arnold's AOVs are not divided); the rest over the albedo.
+    if (has_layer(names, "diffuse_direct", "RGB")
+        && has_layer(names, "diffuse_albedo", "RGB") && !c.albedo.empty())
+        c.direct_layers.push_back({ "diffuse_direct", "diffuse_direct",
+                                    "diffuse_albedo", false, false, "diffuse",
+                                    true });
     return c;
 }
 

@@ -143,7 +143,9 @@ choose_layers(const Job& j, const Convention& conv,
 {
     if (j.mode == Mode::Path && conv.direct_layers.empty())
         fail(format("--mode path: '{}' has no direct light pass apart (Cycles' "
-                    "DiffDir with DiffCol and Denoising Albedo; docs/LAYERS.md)",
+                    "DiffDir with DiffCol and Denoising Albedo, or Arnold's "
+                    "diffuse_direct with diffuse_albedo and albedo; "
+                    "docs/LAYERS.md)",
                     j.in.path));
     path = j.mode == Mode::Path
            || (j.mode == Mode::Auto && auto_path_blocker.empty()
@@ -407,12 +409,15 @@ luminance_plane(const std::vector<float>& rgb)
 /// it changes: the direct quotient is scaled by it, and what it loses is
 /// added to the residual as light.
 void
-route_direct_light(ImageBuf& quotient, const ImageBuf& colour,
+route_direct_light(ImageBuf& quotient, const ImageBuf& colour, bool divided,
                    ImageBuf& residual, const Job& j, const std::string& name)
 {
     ImageBuf direct, v_direct, v_rest;
     const ROI all = quotient.roi();
-    if (!ImageBufAlgo::mul(direct, quotient, colour, {}, j.threads)
+    // A layer of radiance (not divided, Arnold's) is its light already.
+    if (!(divided ? ImageBufAlgo::mul(direct, quotient, colour, {}, j.threads)
+                  : ImageBufAlgo::copy(direct, quotient, TypeFloat, {},
+                                       j.threads))
         || !noise_variance(v_direct, direct, {}, all, all, j.threads)
         || !noise_variance(v_rest, residual, {}, all, all, j.threads))
         fail(format("layer '{}' of '{}': {}", name, j.in.path,
@@ -608,7 +613,8 @@ load_layers(const Strip& strip, const LayersPlan& plan, const Job& j,
                                     j.threads);
     for (size_t k = 0; k < given; ++k)
         if (plan.layers[k].direct)
-            route_direct_light(l.radiance[k], l.albedo[k], l.radiance[i], j,
+            route_direct_light(l.radiance[k], l.albedo[k],
+                               plan.layers[k].divided, l.radiance[i], j,
                                plan.layers[k].name);
     // The mask reads float images; the beauty may be the file's half rows.
     const ImageBuf beauty_float = beauty.spec().format == TypeFloat
