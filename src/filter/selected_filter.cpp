@@ -76,11 +76,9 @@ constexpr float kBoundMargin = 2.0f;
 /// the light, so pixels of similar light have similar noise.
 constexpr float kLightRatio = 2.0f;
 
-/// Squared differences beyond this many noise deviations are winsorized
-/// in every candidate's risk (sure_risk()'s clip_sigmas): a firefly's own
-/// squared error would decide its whole neighbourhood, while a candidate
-/// that fills in a thin shadow the others keep must still pay for it. The
-/// same bound leaves outliers out of residual_bounded_variance().
+/// Risks winsorize differences beyond this many noise deviations (a
+/// firefly's square would decide its neighbourhood; sure_risk()'s
+/// clip_sigmas); residual_bounded_variance() leaves such outliers out.
 constexpr float kOutlierSigmas = 4.0f;
 
 /// Store `v` (all of img's channels a pixel) over the pixels of r.
@@ -558,8 +556,7 @@ risk_inputs(const Selection& S, const Candidate0& c0)
             c0v[4 * k + 3] = c0.d0_k0[size_t(y - k0reg.ybegin) * size_t(k0reg.width())
                                       + size_t(x - k0reg.xbegin)];
             const float o_l = luminance(&c0.o0[3 * i]);
-            // The halves' risk has no noise level to winsorize at: there an
-            // outlier is left out (no observation), as its weight says.
+            // Halves' risk has no noise level to winsorize at: left out.
             const bool outlier = S.halves
                                  && std::fabs(luminance(&z[3 * k]) - o_l)
                                         > kOutlierSigmas * c0.s[i];
