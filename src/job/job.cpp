@@ -237,8 +237,7 @@ plan_light(const Job& j, InputFiles& files, const Convention& conv,
             own        ? std::string()
             : p.path   ? conv.albedo
                        : conv.residual_albedo,
-            conv.residual_layer.empty() ? std::string("Residual")
-                                        : conv.residual_layer,
+            conv.residual_layer,
             // Path mode keeps the environment in the residual, as beauty
             // mode does: at a silhouette against the sky the residual's
             // albedo holds the sky's, and without the sky's light the

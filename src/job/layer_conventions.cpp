@@ -192,6 +192,7 @@ aov_convention(const std::vector<std::string>& names)
         c.direct_layers.push_back({ "diffuse_direct", "diffuse_direct",
                                     "diffuse_albedo", false, false, "diffuse",
                                     true });
+    c.residual_layer = "Residual";  // its name when path mode filters it
     return c;
 }
 

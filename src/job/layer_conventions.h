@@ -61,7 +61,8 @@ struct Convention {
     /// holds the emission of emitters (and its anti-aliasing noise at their
     /// edges), so Emit and Env demodulated by it are smooth.
     std::string residual_albedo;
-    /// The name of that layer (for --aovs).
+    /// The name of that layer (for --aovs and -v), also of path mode's
+    /// residual layer.
     std::string residual_layer;
     /// A part of that residual which is added as it is, not filtered:
     /// Cycles' Env. The environment seen directly has no noise but the

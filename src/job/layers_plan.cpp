@@ -120,7 +120,6 @@ auto_path_blocker(const Job& j)
         bool given;
         const char* option;
     } beauty_options[] = {
-        { j.mode != Mode::Auto, "--mode" },
         { !j.layers.empty(), "--layer" },
         { j.albedo.given, "--albedo" },
         { j.aux.given, "--aux" },
@@ -412,16 +411,15 @@ void
 route_direct_light(ImageBuf& quotient, const ImageBuf& colour, bool divided,
                    ImageBuf& residual, const Job& j, const std::string& name)
 {
-    ImageBuf direct, v_direct, v_rest;
+    ImageBuf product, v_direct, v_rest;
     const ROI all = quotient.roi();
     // A layer of radiance (not divided, Arnold's) is its light already.
-    if (!(divided ? ImageBufAlgo::mul(direct, quotient, colour, {}, j.threads)
-                  : ImageBufAlgo::copy(direct, quotient, TypeFloat, {},
-                                       j.threads))
+    const ImageBuf& direct = divided ? product : quotient;
+    if ((divided && !ImageBufAlgo::mul(product, quotient, colour, {}, j.threads))
         || !noise_variance(v_direct, direct, {}, all, all, j.threads)
         || !noise_variance(v_rest, residual, {}, all, all, j.threads))
         fail(format("layer '{}' of '{}': {}", name, j.in.path,
-                    one_line(direct.geterror() + v_direct.geterror()
+                    one_line(product.geterror() + v_direct.geterror()
                              + v_rest.geterror())));
     const int w = all.width(), h = all.height();
     const size_t n = size_t(w) * size_t(h);
