@@ -342,11 +342,18 @@ layered_denoise(ImageBuf& dst, const std::vector<Layer>& layers,
                                         opt.frame, opname))
         return false;
     CombinedDiagnostics combined(options.diagnostics ? roi : ROI(0, 0, 0, 0));
-    for (const Layer& layer : layers) {
+    for (size_t k = 0; k < layers.size(); ++k) {
+        const Layer& layer = layers[k];
         ImageBuf out, layer_maps;
         const ImageBuf* contribution = nullptr;
         FilterStats layer_stats;
         FilterOptions layer_opt = opt;
+        // Each layer's filter reports 0 to 1: its share of the whole, so
+        // that the progress never goes back.
+        if (options.progress)
+            layer_opt.progress = [&options, k, n = layers.size()](float f) {
+                options.progress((float(k) + f) / float(n));
+            };
         layer_opt.diagnostics   = options.diagnostics && layer.filter
                                       ? &layer_maps
                                       : nullptr;

@@ -195,6 +195,33 @@ TEST(FilterDeterminism, ProgressCallbackChangesNothing)
     EXPECT_FLOAT_EQ(calls.back(), 1.0f) << "progress should end at 1";
 }
 
+// layered_denoise() reports each layer as its share of the whole: the
+// progress of light by path (a direct layer and the rest) never goes back.
+TEST(FilterDeterminism, LayeredProgressNeverGoesBack)
+{
+    Scene a = synth::fine_texture(64, 48, { 8, 909 });
+    Scene b = synth::fine_texture(64, 48, { 8, 910 });
+    std::vector<zdenoise::Layer> layers(2);
+    layers[0].name     = "direct";
+    layers[0].radiance = &a.noisy;
+    layers[0].albedo   = &a.albedo;
+    layers[0].direct   = true;
+    layers[1].name     = "rest";
+    layers[1].radiance = &b.noisy;
+    layers[1].albedo   = &b.albedo;
+    zdenoise::FilterOptions opt;
+    opt.r_max = 6;
+    std::vector<float> calls;
+    opt.progress = [&](float p) { calls.push_back(p); };
+    ImageBuf out = zdenoise::layered_denoise(layers, nullptr, {}, opt);
+    ASSERT_FALSE(out.has_error()) << out.geterror();
+    ASSERT_FALSE(calls.empty()) << "progress callback never called";
+    for (size_t i = 1; i < calls.size(); ++i)
+        ASSERT_LE(calls[i - 1], calls[i]) << "progress went back at report " << i;
+    EXPECT_LE(calls.front(), 0.5f) << "the first layer is half of the work";
+    EXPECT_FLOAT_EQ(calls.back(), 1.0f) << "progress should end at 1";
+}
+
 // Inputs of another pixel type (half) give exactly what the same values
 // given as float give.
 TEST(FilterDeterminism, HalfInputsEqualFloatInputs)

@@ -133,7 +133,8 @@ struct FilterOptions {
     int select = 1;
 
     /// Optional progress report with the fraction done in [0,1], called from
-    /// one thread at a time (not necessarily the caller's). Not a filter
+    /// one thread at a time (not necessarily the caller's), never going
+    /// back (layered_denoise(): each layer its share). Not a filter
     /// parameter: it never changes the result.
     std::function<void(float)> progress;
 
