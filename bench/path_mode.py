@@ -11,6 +11,12 @@ mode of --modes and prints, against SCENE_ref.exr (Combined RGB):
 * "tiles worse": the number of 8x8 tiles whose relMSE is above the noisy input's by more
   than 1e-4, and the largest such excess (issue 44's count of regions made worse).
 
+Two optional columns per run (issue 45's targets): `--materials 20,21,22` adds the relMSE over
+the pixels whose reference `IndexMA` is one of these material indices (bench/scenes/metal_tiles'
+metal spheres); `--box 31` adds the relMSE of 31x31 box means (the image and the reference both
+averaged over every 31x31 window: the low-frequency error, the blotches a per-pixel relMSE
+hides under the noise).
+
 A mode named `default` runs zdenoise with no flags. `--baseline BIN` adds a first column,
 `today`: another build's zdenoise with no flags (the default before a change). `--oidn DIR`
 adds a last column: Intel OIDN 2.4 (--hdr, the file's own albedo and normal, as
@@ -63,6 +69,12 @@ def tiles_worse(out, noisy, ref):
     return int((excess > 1e-4).sum()), float(max(excess.max(), 0.0))
 
 
+def box_means(img, size):
+    """Mean over every size x size window that fits (a summed-area table)."""
+    s = np.pad(img.astype(np.float64).cumsum(0).cumsum(1), ((1, 0), (1, 0), (0, 0)))
+    return (s[size:, size:] - s[:-size, size:] - s[size:, :-size] + s[:-size, :-size]) / (size * size)
+
+
 def cases(args):
     pattern = re.compile(r"(.+)_spp(\d+)_s(\d+)\.exr$")
     for data in args.data:
@@ -88,11 +100,15 @@ def main():
     ap.add_argument("--scenes", default="")
     ap.add_argument("--baseline", help="another zdenoise: its no-flags output is the first column")
     ap.add_argument("--oidn", help="extracted oidn-install directory: adds OIDN's column")
+    ap.add_argument("--materials", default="", help="IndexMA values: adds their region's relMSE")
+    ap.add_argument("--box", type=int, default=0, help="N: adds the relMSE of NxN box means")
     args = ap.parse_args()
     args.data = args.data or [os.path.join(REPO, "..", "shared", "data")]
     args.spp = [int(s) for s in args.spp.split(",")]
     args.seeds = [int(s) for s in args.seeds.split(",")]
     args.scenes = [s for s in args.scenes.split(",") if s]
+    args.materials = [float(s) for s in args.materials.split(",") if s]
+    extra = (["materials"] if args.materials else []) + ([f"box{args.box}"] if args.box else [])
     modes = args.modes.split(",")
     if not os.access(args.zdenoise, os.X_OK):
         print(f"path_mode.py: no zdenoise at {args.zdenoise}", file=sys.stderr)
@@ -101,9 +117,9 @@ def main():
         (m, [args.zdenoise] + ([] if m == "default" else ["--mode", m])) for m in modes]
     head = ["scene", "spp", "seed"]
     for label, _ in runs:
-        head += [f"{label} relMSE", "ratio", "sunlit", "tiles worse (max)"]
+        head += [f"{label} relMSE", "ratio", "sunlit", "tiles worse (max)"] + extra
     if args.oidn:
-        head += ["OIDN relMSE", "sunlit", "tiles worse (max)"] + [
+        head += ["OIDN relMSE", "sunlit", "tiles worse (max)"] + extra + [
             f"{label} / OIDN" for label, _ in runs]
     print(" | ".join(head))
     tmp = tempfile.mkdtemp(prefix="zd_path_mode_")
@@ -123,28 +139,43 @@ def main():
         if direct is not None and colour is not None:
             y = lum(direct * colour)
             sun = y > np.percentile(y, 85)
+        region = None
+        if args.materials:
+            index = channels(ref_path, ["ViewLayer.IndexMA.X"])
+            region = np.isin(np.rint(index[..., 0]), args.materials) if index is not None else None
 
         def scores(img):
             e = rel_error(img, ref)
             sunlit = float(e[sun].mean()) if sun is not None else float("nan")
             return float(e.mean()), sunlit, tiles_worse(img, noisy, ref)
 
+        def extras(img):
+            cols = []
+            if args.materials:
+                e = rel_error(img, ref)
+                cols.append(f"{e[region].mean():.5f}" if region is not None and region.any() else "-")
+            if args.box:
+                cols.append(f"{rel_error(box_means(img, args.box), box_means(ref, args.box)).mean():.6f}")
+            return cols
+
         row, first, wholes = [scene, str(spp), str(seed)], None, []
         for label, cmd in runs:
             out = os.path.join(tmp, f"{label}.exr")
             subprocess.run(cmd + ["--in", path, "-o", out], check=True,
                            stdout=subprocess.DEVNULL)
-            whole, sunlit, (worse, excess) = scores(rgb(out, "Combined"))
+            img = rgb(out, "Combined")
+            whole, sunlit, (worse, excess) = scores(img)
             first = first or whole
             wholes.append(whole)
             row += [f"{whole:.5f}", f"{whole / first:.3f}", f"{sunlit:.5f}",
-                    f"{worse} ({excess:.3f})"]
+                    f"{worse} ({excess:.3f})"] + extras(img)
         if peers:
             out = os.path.join(tmp, "oidn.exr")
             peers.oidn(path, path, out, False)
             buf = oiio.ImageBuf(out)
-            whole, sunlit, (worse, excess) = scores(buf.get_pixels(oiio.FLOAT)[..., :3])
-            row += [f"{whole:.5f}", f"{sunlit:.5f}", f"{worse} ({excess:.3f})"]
+            img = buf.get_pixels(oiio.FLOAT)[..., :3]
+            whole, sunlit, (worse, excess) = scores(img)
+            row += [f"{whole:.5f}", f"{sunlit:.5f}", f"{worse} ({excess:.3f})"] + extras(img)
             row += [f"{w / whole:.2f}" for w in wholes]
         print(" | ".join(row), flush=True)
     return 0
