@@ -84,7 +84,8 @@ def main():
             subprocess.run(lock + [os.path.join(a.oidn, "bin", "oidnDenoise"), "--hdr",
                                    prefix + "_beauty.pfm", "--alb", prefix + "_alb.pfm", "--nrm",
                                    prefix + "_nrm.pfm", "--clean_aux", "--threads", "2", "-o",
-                                   pfm], check=True, capture_output=True)
+                                   pfm], check=True, capture_output=True,
+                           env=dict(os.environ, LD_LIBRARY_PATH=os.path.join(a.oidn, "lib")))
             subprocess.run(["oiiotool", pfm, "-o", out], check=True)
             return channels(out, None)
 

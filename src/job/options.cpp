@@ -264,8 +264,8 @@ options()
           "diffuse_direct and diffuse_albedo) and no option\n"
           "describes the beauty (--albedo, --aux, --variance,\n"
           "--halves, --temporal, a colour space); layers when\n"
-          "--layer is given; else beauty. Measured on ten scenes\n"
-          "in docs/LAYERS.md." },
+          "--layer is given; else beauty. Measured on\n"
+          "twelve scenes in docs/LAYERS.md." },
         not_in_file_name({ Kind::Layers, "--layer", "layers", FIELD(job.layers), "NAME=RADIANCE:ALBEDO[:divided][:reflected]",
           "A layer of the --in file (repeatable; replaces the\n"
           "detected layers). RADIANCE and ALBEDO are channel\n"
