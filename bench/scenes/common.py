@@ -1,5 +1,6 @@
 """Shared helpers for the procedural Blender 3.4 / Cycles test scenes.
-(Copy of the public scene set's helpers, /work/shared/scenes/common.py, so that bench/scenes is self-contained.)
+(Copy of the public scene set's helpers, /work/shared/scenes/common.py, so that bench/scenes is self-contained;
+start(), plaster_mat() and striped_paper() are added.)
 
 Every scene script does:  sys.path.insert(0, <its dir>); import common
 and then builds geometry/materials/lights with these helpers and calls
@@ -12,6 +13,7 @@ Command line (after Blender's `--`):
 """
 import argparse
 import math
+import os
 import sys
 
 import bmesh
@@ -31,6 +33,17 @@ def parse_args():
     p.add_argument('--threads', type=int, default=2)
     p.add_argument('--save-blend', default=None)
     return p.parse_args(argv)
+
+
+def start():
+    """The command line parsed and the scene cleared. --out and --save-blend are made absolute,
+    so that a saved .blend renders to the same place."""
+    args = parse_args()
+    args.out = os.path.abspath(args.out)
+    if args.save_blend:
+        args.save_blend = os.path.abspath(args.save_blend)
+    clear_scene()
+    return args
 
 
 def clear_scene():
@@ -227,6 +240,28 @@ class Mat:
 def diffuse_mat(name, idx, color):
     m = Mat(name, idx)
     return m.out(m.diffuse(color))
+
+
+def plaster_mat(name, idx, dark, light):
+    """Matte plaster: low-contrast noise (scale 9) between the colours dark and light."""
+    m = Mat(name, idx)
+    nz = m.n('ShaderNodeTexNoise', {'Vector': m.coord('Object'), 'Scale': 9.0, 'Detail': 4.0})
+    return m.out(m.diffuse(m.ramp(nz.outputs['Fac'], [(0.35, dark), (0.65, light)])))
+
+
+def striped_paper(name, idx, pitch, width, row, size, dark, light, diamond):
+    """Wallpaper of vertical stripes along object x: every pitch metres a light stripe width
+    wide, with a diamond (half-diagonal size) in its middle every row metres up z."""
+    m = Mat(name, idx)
+    M = m.math
+    sep = m.n('ShaderNodeSeparateXYZ', {0: m.coord('Object')})
+    X, Z = sep.outputs[0], sep.outputs[2]
+    stripe = M('LESS_THAN', M('MODULO', M('ADD', X, 10.0), pitch), width)
+    dia = M('LESS_THAN', M('ADD', M('ABSOLUTE', M('SUBTRACT', M('MODULO', M('ADD', X, 10.0), pitch), width / 2)),
+                           M('ABSOLUTE', M('SUBTRACT', M('MODULO', M('ADD', Z, 10.0), row), row / 2))), size)
+    col = m.mix(stripe, dark, light)
+    col = m.mix(M('MULTIPLY', stripe, dia), col, diamond)
+    return m.out(m.diffuse(col))
 
 
 def emission_mat(name, idx, color, strength):

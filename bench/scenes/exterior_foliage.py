@@ -19,11 +19,7 @@ from mathutils import Quaternion, Vector
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import common as C  # noqa: E402
 
-args = C.parse_args()
-args.out = os.path.abspath(args.out)          # the saved .blend then renders to the same place
-if args.save_blend:
-    args.save_blend = os.path.abspath(args.save_blend)
-C.clear_scene()
+args = C.start()
 rng = random.Random(4242)                      # geometry only, never the --seed
 
 # --- materials -------------------------------------------------------------------------

@@ -14,24 +14,12 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import common as C  # noqa: E402
 
-args = C.parse_args()
-args.out = os.path.abspath(args.out)          # the saved .blend then renders to the same place
-if args.save_blend:
-    args.save_blend = os.path.abspath(args.save_blend)
-C.clear_scene()
+args = C.start()
 
 # --- materials -------------------------------------------------------------------------
 # wallpaper: vertical stripes (4 cm pitch) with a small diamond pattern in the wide stripes
-m = C.Mat('wallpaper', 1)
-M = m.math
-sep = m.n('ShaderNodeSeparateXYZ', {0: m.coord('Object')})
-X, Z = sep.outputs[0], sep.outputs[2]
-stripe = M('LESS_THAN', M('MODULO', M('ADD', X, 10.0), 0.04), 0.026)
-dia = M('LESS_THAN', M('ADD', M('ABSOLUTE', M('SUBTRACT', M('MODULO', M('ADD', X, 10.0), 0.04), 0.013)),
-                       M('ABSOLUTE', M('SUBTRACT', M('MODULO', M('ADD', Z, 10.0), 0.03), 0.015))), 0.008)
-col = m.mix(stripe, (0.20, 0.32, 0.30), (0.72, 0.66, 0.52))
-col = m.mix(M('MULTIPLY', stripe, dia), col, (0.55, 0.12, 0.10))
-mat_paper = m.out(m.diffuse(col))
+mat_paper = C.striped_paper('wallpaper', 1, 0.04, 0.026, 0.03, 0.008, (0.20, 0.32, 0.30), (0.72, 0.66, 0.52),
+                            (0.55, 0.12, 0.10))
 
 # table: wood grain
 m = C.Mat('table_wood', 2)

@@ -14,11 +14,7 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import common as C  # noqa: E402
 
-args = C.parse_args()
-args.out = os.path.abspath(args.out)          # the saved .blend then renders to the same place
-if args.save_blend:
-    args.save_blend = os.path.abspath(args.save_blend)
-C.clear_scene()
+args = C.start()
 
 # --- materials -------------------------------------------------------------------------
 # floor: 1.2 m x 15 cm oak planks, satin
@@ -36,9 +32,7 @@ col = m.mix(br.outputs['Fac'], m.mix(1.0, wood, br.outputs['Color'], 'MULTIPLY')
 mat_floor = m.out(m.principled(base=col, rough=0.4, spec=0.5))
 
 # walls: off-white plaster with low-contrast noise; white ceiling
-m = C.Mat('walls_plaster', 2)
-nz = m.n('ShaderNodeTexNoise', {'Vector': m.coord('Object'), 'Scale': 9.0, 'Detail': 4.0})
-mat_wall = m.out(m.diffuse(m.ramp(nz.outputs['Fac'], [(0.35, (0.66, 0.64, 0.60)), (0.65, (0.80, 0.78, 0.74))])))
+mat_wall = C.plaster_mat('walls_plaster', 2, (0.66, 0.64, 0.60), (0.80, 0.78, 0.74))
 mat_ceil = C.diffuse_mat('ceiling', 3, (0.82, 0.82, 0.80))
 
 # white cabinet (satin paint), grey fabric sofa

@@ -15,11 +15,7 @@ import common as C  # noqa: E402
 
 def main(sun_direction=(0.8, 0.5, -0.35), sun_colour=(1.0, 0.93, 0.82), floor_roughness=0.15):
     """Build and render the room; the variants (interior_low_sun.py) change the sun and the floor."""
-    args = C.parse_args()
-    args.out = os.path.abspath(args.out)          # the saved .blend then renders to the same place
-    if args.save_blend:
-        args.save_blend = os.path.abspath(args.save_blend)
-    C.clear_scene()
+    args = C.start()
 
     # --- materials -------------------------------------------------------------------------
     # floor: 1.2 m x 15 cm planks (staggered), wood grain from a distorted wave texture per plank,
@@ -41,9 +37,7 @@ def main(sun_direction=(0.8, 0.5, -0.35), sun_colour=(1.0, 0.93, 0.82), floor_ro
     mat_floor = m.out(m.principled(base=col, rough=floor_roughness, spec=0.5))
 
     # walls: off-white plaster with low-contrast noise
-    m = C.Mat('walls_plaster', 2)
-    nz = m.n('ShaderNodeTexNoise', {'Vector': m.coord('Object'), 'Scale': 9.0, 'Detail': 4.0})
-    mat_wall = m.out(m.diffuse(m.ramp(nz.outputs['Fac'], [(0.35, (0.62, 0.60, 0.56)), (0.65, (0.80, 0.78, 0.73))])))
+    mat_wall = C.plaster_mat('walls_plaster', 2, (0.62, 0.60, 0.56), (0.80, 0.78, 0.73))
     mat_ceil = C.diffuse_mat('ceiling', 3, (0.78, 0.78, 0.76))
 
     # skirting boards / window frame: white paint, slightly glossy

@@ -14,9 +14,7 @@ import bpy
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import common as C  # noqa: E402
 
-args = C.parse_args()
-args.out = os.path.abspath(args.out)
-C.clear_scene()
+args = C.start()
 
 m = C.Mat('checker', 1)
 chk = m.n('ShaderNodeTexChecker', {'Vector': m.coord('Object'), 'Color1': (0.75, 0.72, 0.65, 1),

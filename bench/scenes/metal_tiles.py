@@ -21,11 +21,7 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import common as C  # noqa: E402
 
-args = C.parse_args()
-args.out = os.path.abspath(args.out)          # the saved .blend then renders to the same place
-if args.save_blend:
-    args.save_blend = os.path.abspath(args.save_blend)
-C.clear_scene()
+args = C.start()
 
 # --- materials -------------------------------------------------------------------------
 # floor: 40 cm checker of mirror steel and glossy ceramic, 5 mm grout (a Brick texture's mortar)
@@ -46,16 +42,8 @@ tiles = m.n('ShaderNodeMixShader', {0: ck.outputs['Fac'], 1: ceramic, 2: mirror_
 mat_floor = m.out(m.n('ShaderNodeMixShader', {0: br.outputs['Fac'], 1: tiles, 2: grout}).outputs[0])
 
 # back wall: 6 cm stripes with a small diamond in the light ones (seen in the mirror tiles too)
-m = C.Mat('back_wallpaper', 2)
-M = m.math
-sep = m.n('ShaderNodeSeparateXYZ', {0: m.coord('Object')})
-X, Z = sep.outputs[0], sep.outputs[2]
-stripe = M('LESS_THAN', M('MODULO', M('ADD', X, 10.0), 0.06), 0.036)
-dia = M('LESS_THAN', M('ADD', M('ABSOLUTE', M('SUBTRACT', M('MODULO', M('ADD', X, 10.0), 0.06), 0.018)),
-                       M('ABSOLUTE', M('SUBTRACT', M('MODULO', M('ADD', Z, 10.0), 0.05), 0.025))), 0.012)
-col = m.mix(stripe, (0.16, 0.20, 0.34), (0.74, 0.68, 0.55))
-col = m.mix(M('MULTIPLY', stripe, dia), col, (0.60, 0.14, 0.08))
-mat_paper = m.out(m.diffuse(col))
+mat_paper = C.striped_paper('back_wallpaper', 2, 0.06, 0.036, 0.05, 0.012, (0.16, 0.20, 0.34), (0.74, 0.68, 0.55),
+                            (0.60, 0.14, 0.08))
 mat_plaster = C.diffuse_mat('plaster', 3, (0.68, 0.67, 0.64))
 
 # box with a 1 cm checker; drum with wood grain cut by 2 cm stripes

@@ -51,11 +51,7 @@ def main(sun_elevation=60.0, sun_azimuth=200.0, sun_colour=(1.0, 0.95, 0.88)):
     towards the camera, from a sun above the frame, in front and to the right, so that the
     shadow grid lies left of the pergola's footprint and reaches the foreground; near -x the
     rafters' depth hardly widens their shadows)."""
-    args = C.parse_args()
-    args.out = os.path.abspath(args.out)          # the saved .blend then renders to the same place
-    if args.save_blend:
-        args.save_blend = os.path.abspath(args.save_blend)
-    C.clear_scene()
+    args = C.start()
 
     # --- materials -------------------------------------------------------------------------
     # patio: 40 cm square sandstone tiles (brick texture, no offset) laid diagonally, 7 mm grey

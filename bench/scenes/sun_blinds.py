@@ -31,11 +31,7 @@ def main(sun_elevation=45.0, sun_azimuth=25.0, sun_colour=(1.0, 0.94, 0.84), sla
     from +x (straight in through the window, which faces -x) towards +y (the back wall);
     slat_tilt: degrees the slats slope down into the room.  The variants (sun_blinds_low.py)
     change these."""
-    args = C.parse_args()
-    args.out = os.path.abspath(args.out)          # the saved .blend then renders to the same place
-    if args.save_blend:
-        args.save_blend = os.path.abspath(args.save_blend)
-    C.clear_scene()
+    args = C.start()
 
     # --- materials -------------------------------------------------------------------------
     # floor: 90 x 11 cm oak planks running along x (across the stripes), staggered, fine
@@ -57,9 +53,7 @@ def main(sun_elevation=45.0, sun_azimuth=25.0, sun_colour=(1.0, 0.94, 0.84), sla
     mat_floor = m.out(m.principled(base=col, rough=0.35, spec=0.5))
 
     # walls: off-white plaster with low-contrast noise; plain ceiling
-    m = C.Mat('walls_plaster', 2)
-    nz = m.n('ShaderNodeTexNoise', {'Vector': m.coord('Object'), 'Scale': 9.0, 'Detail': 4.0})
-    mat_wall = m.out(m.diffuse(m.ramp(nz.outputs['Fac'], [(0.35, (0.64, 0.61, 0.56)), (0.65, (0.80, 0.77, 0.71))])))
+    mat_wall = C.plaster_mat('walls_plaster', 2, (0.64, 0.61, 0.56), (0.80, 0.77, 0.71))
     mat_ceil = C.diffuse_mat('ceiling', 3, (0.78, 0.78, 0.76))
 
     # window frame, skirting, blind slats and rails: white paint / lacquered aluminium
