@@ -34,6 +34,7 @@ import tempfile
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 from aux import DATA, REPO, SCENES, channels, relmse  # noqa: E402
+import peers  # noqa: E402  (OIDN, run as bench/peers.py runs it)
 
 SCRIPT = os.path.join(REPO, "share", "blender", "zdenoise_aux.py")
 
@@ -75,18 +76,11 @@ def main():
             last_log[0] = r.stdout + r.stderr
             return channels(out, None)
 
+        yardstick = peers.Peers(argparse.Namespace(oidn=a.oidn, shared=os.path.join(REPO, "..", "shared")),
+                                tmp, lock)
+
         def oidn(noisy, aux):
-            prefix = os.path.join(tmp, "oidn")
-            conv = os.path.join(REPO, "..", "shared", "peers", "exr2pfm.py")
-            subprocess.run(["/usr/bin/python3", conv, noisy, prefix, "beauty"], check=True)
-            subprocess.run(["/usr/bin/python3", conv, aux, prefix, "alb", "nrm"], check=True)
-            pfm = prefix + "_out.pfm"
-            subprocess.run(lock + [os.path.join(a.oidn, "bin", "oidnDenoise"), "--hdr",
-                                   prefix + "_beauty.pfm", "--alb", prefix + "_alb.pfm", "--nrm",
-                                   prefix + "_nrm.pfm", "--clean_aux", "--threads", "2", "-o",
-                                   pfm], check=True, capture_output=True,
-                           env=dict(os.environ, LD_LIBRARY_PATH=os.path.join(a.oidn, "lib")))
-            subprocess.run(["oiiotool", pfm, "-o", out], check=True)
+            yardstick.oidn(noisy, aux, out, True)
             return channels(out, None)
 
         def rejected():

@@ -139,24 +139,22 @@ def main():
         if direct is not None and colour is not None:
             y = lum(direct * colour)
             sun = y > np.percentile(y, 85)
+        ref_box = box_means(ref, args.box) if args.box else None
         region = None
         if args.materials:
             index = channels(ref_path, ["ViewLayer.IndexMA.X"])
             region = np.isin(np.rint(index[..., 0]), args.materials) if index is not None else None
 
         def scores(img):
+            """relMSE, the sunlit region's, tiles worse, and the optional columns."""
             e = rel_error(img, ref)
             sunlit = float(e[sun].mean()) if sun is not None else float("nan")
-            return float(e.mean()), sunlit, tiles_worse(img, noisy, ref)
-
-        def extras(img):
-            cols = []
+            extras = []
             if args.materials:
-                e = rel_error(img, ref)
-                cols.append(f"{e[region].mean():.5f}" if region is not None and region.any() else "-")
+                extras.append(f"{e[region].mean():.5f}" if region is not None and region.any() else "-")
             if args.box:
-                cols.append(f"{rel_error(box_means(img, args.box), box_means(ref, args.box)).mean():.6f}")
-            return cols
+                extras.append(f"{rel_error(box_means(img, args.box), ref_box).mean():.6f}")
+            return float(e.mean()), sunlit, tiles_worse(img, noisy, ref), extras
 
         row, first, wholes = [scene, str(spp), str(seed)], None, []
         for label, cmd in runs:
@@ -164,18 +162,18 @@ def main():
             subprocess.run(cmd + ["--in", path, "-o", out], check=True,
                            stdout=subprocess.DEVNULL)
             img = rgb(out, "Combined")
-            whole, sunlit, (worse, excess) = scores(img)
+            whole, sunlit, (worse, excess), extras = scores(img)
             first = first or whole
             wholes.append(whole)
             row += [f"{whole:.5f}", f"{whole / first:.3f}", f"{sunlit:.5f}",
-                    f"{worse} ({excess:.3f})"] + extras(img)
+                    f"{worse} ({excess:.3f})"] + extras
         if peers:
             out = os.path.join(tmp, "oidn.exr")
             peers.oidn(path, path, out, False)
             buf = oiio.ImageBuf(out)
             img = buf.get_pixels(oiio.FLOAT)[..., :3]
-            whole, sunlit, (worse, excess) = scores(img)
-            row += [f"{whole:.5f}", f"{sunlit:.5f}", f"{worse} ({excess:.3f})"] + extras(img)
+            whole, sunlit, (worse, excess), extras = scores(img)
+            row += [f"{whole:.5f}", f"{sunlit:.5f}", f"{worse} ({excess:.3f})"] + extras
             row += [f"{w / whole:.2f}" for w in wholes]
         print(" | ".join(row), flush=True)
     return 0

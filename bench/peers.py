@@ -79,8 +79,9 @@ def rel_err(img, ref):
 
 
 class Peers:
-    def __init__(self, a, tmp):
-        self.a, self.tmp = a, tmp
+    def __init__(self, a, tmp, lock=()):
+        """a: .oidn, .shared (and .nfor for nfor()); lock: a prefix for OIDN's run (flock FILE)."""
+        self.a, self.tmp, self.lock = a, tmp, list(lock)
         self.conv = os.path.join(a.shared, 'peers', 'exr2pfm.py')
 
     def oidn(self, noisy, aux, out, clean):
@@ -90,7 +91,7 @@ class Peers:
         cmd = [os.path.join(self.a.oidn, 'bin', 'oidnDenoise'), '--hdr', p + '_beauty.pfm',
                '--alb', p + '_alb.pfm', '--nrm', p + '_nrm.pfm', '--threads', '2', '-o', p + '_out.pfm']
         env = dict(os.environ, LD_LIBRARY_PATH=os.path.join(self.a.oidn, 'lib'))
-        run(cmd + (['--clean_aux'] if clean else []), env)
+        run(self.lock + cmd + (['--clean_aux'] if clean else []), env)
         run(['oiiotool', p + '_out.pfm', '-o', out])
 
     def nfor(self, a, b, out):
