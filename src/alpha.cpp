@@ -81,7 +81,9 @@ alpha_halo(const FilterOptions& options)
 {
     // keep_structure() reads the filtered coverage one pixel beyond the
     // output, which the filter computes from its own halo around that.
-    return filter_halo(options) + 1;
+    FilterOptions coverage = options;
+    coverage.energy_radius = 0;  // denoise_alpha(): a coverage is no light
+    return filter_halo(coverage) + 1;
 }
 
 
@@ -127,6 +129,7 @@ denoise_alpha(ImageBuf& dst, const ImageBuf& alpha, const Guides& guides,
     o.progress      = nullptr;
     o.diagnostics   = nullptr;
     o.hat_diagonal  = nullptr;
+    o.energy_radius = 0;  // a coverage is no light (section 7b keeps energy)
     ImageBuf kept;
     if (!denoise(filtered, light, albedo, g, o, nullptr, halo_region(roi, frame, 1),
                  nthreads)

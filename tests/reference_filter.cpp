@@ -1196,7 +1196,8 @@ regression_filter(const RefImage& z, const RefImage& La, const RefGuides& guides
     if (z.nch < 3 || La.nch < 3 || La.w != z.w || La.h != z.h)
         throw std::invalid_argument("regression_filter: bad inputs");
     Filter f(z, La, guides, opt);
-    return f.run(stats, diagnostics);
+    const RefImage out = f.run(stats, diagnostics);
+    return opt.energy_radius > 0 ? correct_energy(z, out, La, opt) : out;
 }
 
 RefImage

@@ -90,6 +90,12 @@ RefImage prefilter_albedo(const RefImage& albedo, int samples,
                           const RefImage* half_a = nullptr,
                           const RefImage* half_b = nullptr);
 
+/// Section 7b: the filtered quotient zf scaled towards z's light where
+/// their blurs differ by more than z's noise at that scale explains
+/// (regression_filter() applies it when opt.energy_radius > 0).
+RefImage correct_energy(const RefImage& z, const RefImage& zf,
+                        const RefImage& La, const zdenoise::FilterOptions& opt);
+
 /// demodulate + regression_filter + remodulate.
 RefImage denoise(const RefImage& L, const RefImage& La, const RefGuides& guides,
                  const zdenoise::FilterOptions& opt, RefStats* stats = nullptr);

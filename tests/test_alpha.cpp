@@ -161,8 +161,10 @@ TEST(Alpha, IsTheFilterOnTheCoverageClampedWithSolidPixelsKept)
             const float c[3] = { a, a, a };
             light.setpixel(x, y, c, 3);
         }
-    const ImageBuf filtered
-        = zdenoise::keep_structure(light, zdenoise::denoise(light, albedo));
+    zdenoise::FilterOptions coverage;
+    coverage.energy_radius = 0;  // denoise_alpha(): a coverage is no light
+    const ImageBuf filtered = zdenoise::keep_structure(
+        light, zdenoise::denoise(light, albedo, zdenoise::Guides(), coverage));
     int solid = 0;
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {

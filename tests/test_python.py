@@ -216,7 +216,8 @@ class Arrays(unittest.TestCase):
         # The preset first, the others on top, whatever their order; the
         # keyword spelling of value-k.
         spec = dict(edge_k=3, value_k=2, sigma_good=1, radius_growth=1,
-                    stride=1, outlier_spread=0, value_noise=0, select=0)
+                    stride=1, outlier_spread=0, value_noise=0, select=0,
+                    energy_radius=0)
         self.assertTrue(np.array_equal(
             zdenoise.denoise(self.noisy, self.albedo, eta=0.03, preset="spec"),
             zdenoise.denoise(self.noisy, self.albedo, eta=0.03, **spec)))

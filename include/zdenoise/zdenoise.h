@@ -122,6 +122,15 @@ struct FilterOptions {
     /// (docs/FILTER.md 5.1); 0 = every fit at full resolution, the exact
     /// filter. At least 4.
     int pyramid_radius = 0;
+    /// The radius r of the low-frequency energy correction (docs/FILTER.md
+    /// section 7b), in pixels; 0 = none, the method's. The filtered light
+    /// is scaled towards the input's where their blurs (three box passes
+    /// of radius r, about a Gaussian of standard deviation r) differ by
+    /// more than the input's noise at that scale explains: the light the
+    /// value term takes out at low sample counts comes back, without the
+    /// blotches of its uneven loss. Pixels the filter leaves as they were
+    /// are not changed. It widens filter_halo() by 3 r + 1. At most 64.
+    int energy_radius = 12;
     /// 1 = each pixel takes, by its estimated error (Stein's unbiased risk
     /// estimate, or the halves' cross error when half_a and half_b are
     /// given), today's filter or one of two feature regressions
@@ -198,6 +207,7 @@ struct FilterOptions {
         o.outlier_spread = 0;
         o.value_noise = 0;
         o.select = 0;
+        o.energy_radius = 0;
         return o;
     }
 };
@@ -658,7 +668,8 @@ ZDENOISE_API ImageBuf layered_denoise(const std::vector<Layer>& layers,
 /// pixels at most this many columns and rows away (centres up to r_max
 /// away, whose windows reach r_max further, plus the 4-pixel footprint of
 /// the noise estimate, plus centre_stride - 1 for the lattice points that
-/// decide the centres, docs/FILTER.md section 8). To compute a part of an
+/// decide the centres, docs/FILTER.md section 8; plus 3 energy_radius + 1
+/// for the energy correction's blur, section 7b). To compute a part of an
 /// image exactly, give the inputs over that part widened by the halo and
 /// clipped to the image, and say which image it is (FilterOptions::frame).
 ZDENOISE_API int filter_halo(const FilterOptions& options);

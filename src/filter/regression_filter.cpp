@@ -27,6 +27,7 @@
 #include "checks.h"
 #include "internal.h"
 #include "decoded_filter.h"
+#include "energy_correction.h"
 #include "selected_filter.h"
 
 namespace zdenoise {
@@ -84,6 +85,8 @@ check_options(ImageBuf& dst, const FilterOptions& o)
         return bad("outlier_spread", o.outlier_spread, "needs 0 or 1");
     if (o.select != 0 && o.select != 1)
         return bad("select", o.select, "needs 0 or 1");
+    if (o.energy_radius < 0 || o.energy_radius > 64)
+        return bad("energy_radius", o.energy_radius, "needs 0 <= energy_radius <= 64");
     if (!finite_nonneg(o.quadrant_power))
         return bad("quadrant_power", o.quadrant_power,
                    "needs a finite number >= 0");
@@ -112,12 +115,101 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
                              totals, hat);
 }
 
+
+/// The filter over `area` (select or not) into dst, in tiles: they bound
+/// the working memory whatever the frame size, and the result is exactly
+/// the whole-image one (section 8), so the tile size is not a parameter.
+/// `progress`, if given, hears the fraction of the area done.
+bool
+filter_tiles(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
+             const Guides& guides, FilterOptions tile_opt, ROI area, int nthreads,
+             FilterStats& totals, ImageBuf* hat,
+             const std::function<void(float)>& progress)
+{
+    const int side = tile_opt.select ? kSelectionTile : kFilterTile;
+    const int ntx  = (area.width() + side - 1) / side;
+    const int nty  = (area.height() + side - 1) / side;
+    const int ntiles = ntx * nty;
+    for (int t = 0; t < ntiles; ++t) {
+        ROI tile(area.xbegin + (t % ntx) * side, 0, area.ybegin + (t / ntx) * side, 0,
+                 area.zbegin, area.zend, area.chbegin, area.chend);
+        tile.xend = std::min(tile.xbegin + side, area.xend);
+        tile.yend = std::min(tile.ybegin + side, area.yend);
+        if (progress)
+            tile_opt.progress = [&](float f) {
+                progress((float(t) + f) / float(ntiles));
+            };
+        const bool done
+            = tile_opt.select
+                  ? selected_regression_filter(dst, quotient, albedo, guides,
+                                               tile_opt, tile, nthreads, totals)
+                  : filter_tile(dst, quotient, albedo, guides, tile_opt, tile,
+                                nthreads, totals, hat);
+        if (!done || cancel_requested(tile_opt))
+            return false;
+    }
+    return true;
+}
+
+
+/// Section 7b over roi, after the filter filled it in dst: the filter run
+/// again over the rows and columns around roi that the correction reads
+/// (none where roi is the whole frame), then the correction.
+bool
+keep_energy(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
+            const Guides& guides, FilterOptions band_opt, int radius, ROI roi,
+            int nthreads)
+{
+    const ROI xy = halo_region(roi, band_opt.frame, energy_reach(radius));
+    // All the quotient's channels: the filter writes them all.
+    const ROI area(xy.xbegin, xy.xend, xy.ybegin, xy.yend, roi.zbegin, roi.zend,
+                   0, quotient.nchannels());
+    ImageSpec spec(area, TypeFloat);
+    ImageBuf around(spec);
+    band_opt.progress     = nullptr;
+    band_opt.diagnostics  = nullptr;
+    band_opt.hat_diagonal = nullptr;
+    const ROI bands[4] = {
+        ROI(area.xbegin, area.xend, area.ybegin, roi.ybegin, roi.zbegin, roi.zend,
+            roi.chbegin, roi.chend),
+        ROI(area.xbegin, area.xend, roi.yend, area.yend, roi.zbegin, roi.zend,
+            roi.chbegin, roi.chend),
+        ROI(area.xbegin, roi.xbegin, roi.ybegin, roi.yend, roi.zbegin, roi.zend,
+            roi.chbegin, roi.chend),
+        ROI(roi.xend, area.xend, roi.ybegin, roi.yend, roi.zbegin, roi.zend,
+            roi.chbegin, roi.chend),
+    };
+    FilterStats band_stats;  // the statistics stay roi's
+    for (const ROI& band : bands)
+        if (band.width() > 0 && band.height() > 0
+            && !filter_tiles(around, quotient, albedo, guides, band_opt, band,
+                             nthreads, band_stats, nullptr, nullptr)) {
+            if (around.has_error())
+                dst.errorfmt("{}", around.geterror());
+            return false;
+        }
+    // roi: what the filter put in dst.
+    const std::vector<float> filtered = read_channels(dst, roi, roi.chbegin, roi.chend);
+    if (!around.set_pixels(roi, TypeFloat, filtered.data())) {
+        dst.errorfmt("{}", around.geterror());
+        return false;
+    }
+    correct_energy(dst, around, quotient, albedo, band_opt.albedo_eps, radius,
+                   roi, xy, nthreads);
+    return true;
+}
+
 }  // namespace
 
 
 int
 filter_halo(const FilterOptions& options)
 {
+    if (options.energy_radius > 0) {
+        FilterOptions inner = options;
+        inner.energy_radius = 0;
+        return filter_halo(inner) + energy_reach(options.energy_radius);
+    }
     if (options.select) {
         FilterOptions base = options;
         base.select        = 0;
@@ -182,34 +274,21 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
         && !detail::prepare_result(dst, *hat, roi, tile_opt.frame, 1, opname,
                                     "hat diagonal"))
         return false;
-    // Tiles bound the working memory whatever the frame size; the result
-    // is exactly the whole-image one (section 8), so the tile size is not
-    // a parameter.
-    const int side = options.select ? detail::kSelectionTile : detail::kFilterTile;
-    const int ntx  = (roi.width() + side - 1) / side;
-    const int nty  = (roi.height() + side - 1) / side;
-    const int ntiles = ntx * nty;
     FilterStats totals;
-    for (int t = 0; t < ntiles; ++t) {
-        ROI tile(roi.xbegin + (t % ntx) * side, 0, roi.ybegin + (t / ntx) * side, 0,
-                 roi.zbegin, roi.zend, roi.chbegin, roi.chend);
-        tile.xend = std::min(tile.xbegin + side, roi.xend);
-        tile.yend = std::min(tile.ybegin + side, roi.yend);
-        if (options.progress)
-            tile_opt.progress = [&](float f) {
-                options.progress((float(t) + f) / float(ntiles));
-            };
-        const bool done
-            = options.select
-                  ? detail::selected_regression_filter(dst, quotient, albedo, guides,
-                                                       tile_opt, tile, nthreads, totals)
-                  : filter_tile(dst, quotient, albedo, guides, tile_opt, tile,
-                                nthreads, totals, hat);
-        // A stage that saw the flag stops with no message of its own.
+    tile_opt.energy_radius = 0;  // the tiles' filter; the correction below
+    const bool done = filter_tiles(dst, quotient, albedo, guides, tile_opt, roi,
+                                   nthreads, totals, hat, options.progress);
+    // A stage that saw the flag stops with no message of its own.
+    if (cancel_requested(options))
+        return cancelled(dst, dst_was_given, roi, nthreads);
+    if (!done)
+        return false;
+    if (options.energy_radius > 0
+        && !keep_energy(dst, quotient, albedo, guides, tile_opt,
+                        options.energy_radius, roi, nthreads)) {
         if (cancel_requested(options))
             return cancelled(dst, dst_was_given, roi, nthreads);
-        if (!done)
-            return false;
+        return false;
     }
     if (stats)
         *stats = totals;

@@ -110,6 +110,7 @@ Filter parameters (docs/FILTER.md):
 {--tau-min}
 {--value-k}
 {--value-noise}
+{--energy-radius}
 {--sigma-good}
 {--albedo-eps}
 {--depth-tol}
@@ -303,6 +304,10 @@ options()
           "1: the value weight's scale adds the centre's noise\n"
           "(t standard deviations), so that noise is not taken\n"
           "for structure; 0: the method's |<z>| alone (1)" }),
+        parameter({ Kind::Whole, "--energy-radius", "energy-radius", FIELD(job.filter.energy_radius), "N",
+          "Scale (px) at which the filtered light keeps the\n"
+          "input's energy where the input's noise allows;\n"
+          "0: off, the method's (12)" }),
         parameter({ Kind::Real, "--sigma-good", "sigma-good", FIELD(job.filter.sigma_good), "X",
           "Noisiest point taking part in fits (3)" }),
         parameter({ Kind::Real, "--albedo-eps", "albedo-eps", FIELD(job.filter.albedo_eps), "X",
