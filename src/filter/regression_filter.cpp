@@ -101,17 +101,18 @@ namespace {
 
 /// Filter the output pixels `roi` (sections 2-7), reading the inputs over
 /// roi plus the halo everything depends on. `opt.frame` is the image's data
-/// window. `hat`, if not null, receives the hat diagonal.
+/// window. `hat`, if not null, receives the hat diagonal. The statistics
+/// count the windows and pixels in `counted`.
 bool
 filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
             const Guides& guides, const FilterOptions& opt, ROI roi,
-            int nthreads, FilterStats& totals, ImageBuf* hat)
+            const ROI& counted, int nthreads, FilterStats& totals, ImageBuf* hat)
 {
     const ROI region = halo_region(roi, opt.frame, filter_halo(opt));
     FilterInputs in;
     return decode_filter_inputs(in, dst, quotient, albedo, guides, opt, region,
                                 nthreads)
-           && filter_decoded(dst, quotient, in, opt, roi, roi, nthreads,
+           && filter_decoded(dst, quotient, in, opt, roi, counted, nthreads,
                              totals, hat);
 }
 
@@ -119,11 +120,12 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
 /// The filter over `area` (select or not) into dst, in tiles: they bound
 /// the working memory whatever the frame size, and the result is exactly
 /// the whole-image one (section 8), so the tile size is not a parameter.
-/// `progress`, if given, hears the fraction of the area done.
+/// `progress`, if given, hears the fraction of the area done. The
+/// statistics count the windows and pixels in `counted`.
 bool
 filter_tiles(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
-             const Guides& guides, FilterOptions tile_opt, ROI area, int nthreads,
-             FilterStats& totals, ImageBuf* hat,
+             const Guides& guides, FilterOptions tile_opt, ROI area,
+             const ROI& counted, int nthreads, FilterStats& totals, ImageBuf* hat,
              const std::function<void(float)>& progress)
 {
     const int side = tile_opt.select ? kSelectionTile : kFilterTile;
@@ -135,6 +137,8 @@ filter_tiles(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
                  area.zbegin, area.zend, area.chbegin, area.chend);
         tile.xend = std::min(tile.xbegin + side, area.xend);
         tile.yend = std::min(tile.ybegin + side, area.yend);
+        // Each tile counts its own centres (its filter fits those around it too).
+        const ROI tile_counted = roi_intersection(tile, counted);
         if (progress)
             tile_opt.progress = [&](float f) {
                 progress((float(t) + f) / float(ntiles));
@@ -142,9 +146,10 @@ filter_tiles(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
         const bool done
             = tile_opt.select
                   ? selected_regression_filter(dst, quotient, albedo, guides,
-                                               tile_opt, tile, nthreads, totals)
+                                               tile_opt, tile, tile_counted,
+                                               nthreads, totals)
                   : filter_tile(dst, quotient, albedo, guides, tile_opt, tile,
-                                nthreads, totals, hat);
+                                tile_counted, nthreads, totals, hat);
         if (!done || cancel_requested(tile_opt))
             return false;
     }
@@ -152,50 +157,64 @@ filter_tiles(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
 }
 
 
-/// Section 7b over roi, after the filter filled it in dst: the filter run
-/// again over the rows and columns around roi that the correction reads
-/// (none where roi is the whole frame), then the correction.
+/// The filter and section 7b's correction over roi. The correction reads
+/// the filtered light over `area`, roi and the band of energy_reach()
+/// around it: one run over the area, its statistics counted for roi alone;
+/// where maps are asked for (they are roi's), roi first into dst and the
+/// band after.
 bool
-keep_energy(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
-            const Guides& guides, FilterOptions band_opt, int radius, ROI roi,
-            int nthreads)
+filter_keeping_energy(ImageBuf& dst, const ImageBuf& quotient,
+                      const ImageBuf& albedo, const Guides& guides,
+                      FilterOptions opt, int radius, ROI roi, int nthreads,
+                      FilterStats& totals, ImageBuf* hat,
+                      const std::function<void(float)>& progress)
 {
-    const ROI xy = halo_region(roi, band_opt.frame, energy_reach(radius));
+    const ROI xy = halo_region(roi, opt.frame, energy_reach(radius));
     // All the quotient's channels: the filter writes them all.
     const ROI area(xy.xbegin, xy.xend, xy.ybegin, xy.yend, roi.zbegin, roi.zend,
                    0, quotient.nchannels());
-    ImageSpec spec(area, TypeFloat);
-    ImageBuf around(spec);
-    band_opt.progress     = nullptr;
-    band_opt.diagnostics  = nullptr;
-    band_opt.hat_diagonal = nullptr;
-    const ROI bands[4] = {
-        ROI(area.xbegin, area.xend, area.ybegin, roi.ybegin, roi.zbegin, roi.zend,
-            roi.chbegin, roi.chend),
-        ROI(area.xbegin, area.xend, roi.yend, area.yend, roi.zbegin, roi.zend,
-            roi.chbegin, roi.chend),
-        ROI(area.xbegin, roi.xbegin, roi.ybegin, roi.yend, roi.zbegin, roi.zend,
-            roi.chbegin, roi.chend),
-        ROI(roi.xend, area.xend, roi.ybegin, roi.yend, roi.zbegin, roi.zend,
-            roi.chbegin, roi.chend),
-    };
-    FilterStats band_stats;  // the statistics stay roi's
-    for (const ROI& band : bands)
-        if (band.width() > 0 && band.height() > 0
-            && !filter_tiles(around, quotient, albedo, guides, band_opt, band,
-                             nthreads, band_stats, nullptr, nullptr)) {
-            if (around.has_error())
-                dst.errorfmt("{}", around.geterror());
-            return false;
-        }
-    // roi: what the filter put in dst.
-    const std::vector<float> filtered = read_channels(dst, roi, roi.chbegin, roi.chend);
-    if (!around.set_pixels(roi, TypeFloat, filtered.data())) {
-        dst.errorfmt("{}", around.geterror());
+    ImageBuf around(ImageSpec(area, TypeFloat));
+    auto fail = [&] {
+        if (around.has_error())
+            dst.errorfmt("{}", around.geterror());
         return false;
+    };
+    if (!opt.diagnostics && !hat) {
+        if (!filter_tiles(around, quotient, albedo, guides, opt, area, roi,
+                          nthreads, totals, nullptr, progress))
+            return fail();
+        const std::vector<float> filtered = read_channels(around, roi, roi.chbegin,
+                                                          roi.chend);
+        if (!dst.set_pixels(roi, TypeFloat, filtered.data()))
+            return false;
+    } else {
+        if (!filter_tiles(dst, quotient, albedo, guides, opt, roi, roi, nthreads,
+                          totals, hat, progress))
+            return false;
+        opt.diagnostics = nullptr;
+        const ROI bands[4] = {
+            ROI(area.xbegin, area.xend, area.ybegin, roi.ybegin, roi.zbegin, roi.zend,
+                roi.chbegin, roi.chend),
+            ROI(area.xbegin, area.xend, roi.yend, area.yend, roi.zbegin, roi.zend,
+                roi.chbegin, roi.chend),
+            ROI(area.xbegin, roi.xbegin, roi.ybegin, roi.yend, roi.zbegin, roi.zend,
+                roi.chbegin, roi.chend),
+            ROI(roi.xend, area.xend, roi.ybegin, roi.yend, roi.zbegin, roi.zend,
+                roi.chbegin, roi.chend),
+        };
+        FilterStats band_stats;  // the statistics stay roi's
+        for (const ROI& band : bands)
+            if (band.width() > 0 && band.height() > 0
+                && !filter_tiles(around, quotient, albedo, guides, opt, band, band,
+                                 nthreads, band_stats, nullptr, nullptr))
+                return fail();
+        const std::vector<float> filtered = read_channels(dst, roi, roi.chbegin,
+                                                          roi.chend);
+        if (!around.set_pixels(roi, TypeFloat, filtered.data()))
+            return fail();
     }
-    correct_energy(dst, around, quotient, albedo, band_opt.albedo_eps, radius,
-                   roi, xy, nthreads);
+    correct_energy(dst, around, quotient, albedo, opt.albedo_eps, radius, roi,
+                   xy, nthreads);
     return true;
 }
 
@@ -275,21 +294,19 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                                     "hat diagonal"))
         return false;
     FilterStats totals;
-    tile_opt.energy_radius = 0;  // the tiles' filter; the correction below
-    const bool done = filter_tiles(dst, quotient, albedo, guides, tile_opt, roi,
-                                   nthreads, totals, hat, options.progress);
+    tile_opt.energy_radius = 0;  // the tiles' filter; the correction after
+    const bool done
+        = options.energy_radius > 0
+              ? filter_keeping_energy(dst, quotient, albedo, guides, tile_opt,
+                                      options.energy_radius, roi, nthreads,
+                                      totals, hat, options.progress)
+              : filter_tiles(dst, quotient, albedo, guides, tile_opt, roi, roi,
+                             nthreads, totals, hat, options.progress);
     // A stage that saw the flag stops with no message of its own.
     if (cancel_requested(options))
         return cancelled(dst, dst_was_given, roi, nthreads);
     if (!done)
         return false;
-    if (options.energy_radius > 0
-        && !keep_energy(dst, quotient, albedo, guides, tile_opt,
-                        options.energy_radius, roi, nthreads)) {
-        if (cancel_requested(options))
-            return cancelled(dst, dst_was_given, roi, nthreads);
-        return false;
-    }
     if (stats)
         *stats = totals;
     return true;

@@ -206,6 +206,7 @@ struct Selection {
     SelectionOptions so;
     bool halves;  ///< the risks from halves_risk(), else sure_risk()
     ROI roi;      ///< the output pixels
+    ROI counted;  ///< those whose windows and pixels the statistics count
     ROI sel;      ///< the choice's support: the risks, candidates 1 and 2
     ROI pil;      ///< the pilot's: candidate 0 as candidates 1 and 2 read it
     ROI k0reg;    ///< candidate 0's: pil and its noise bound's box
@@ -213,11 +214,11 @@ struct Selection {
 
     Selection(ImageBuf& dst_, const ImageBuf& quotient_, const ImageBuf& albedo_,
               const Guides& guides_, const FilterOptions& options_, ROI roi_,
-              int nthreads_)
+              ROI counted_, int nthreads_)
         : dst(dst_), quotient(quotient_), albedo(albedo_), guides(guides_)
         , options(options_), nthreads(nthreads_), base(options_)
         , fos(feature_candidates()), halves(guides_.half_a && guides_.half_b)
-        , roi(roi_)
+        , roi(roi_), counted(counted_)
     {
         const ROI& frame = options.frame;
         base.select      = 0;
@@ -365,7 +366,7 @@ filter_candidate0(Selection& S, const FilterInputs& in, FilterStats& totals,
         return S.fail(c0.out0);
     S.base.diagnostics = S.options.diagnostics ? &c0.maps : nullptr;
     S.base.progress    = S.progress(0.0f, S.halves ? 0.3f : 0.6f);
-    if (!filter_decoded(c0.out0, S.quotient, in, S.base, S.k0reg, S.roi,
+    if (!filter_decoded(c0.out0, S.quotient, in, S.base, S.k0reg, S.counted,
                         S.nthreads, totals, S.halves ? nullptr : &c0.hat0,
                         &k0spread))
         return S.fail(c0.out0);
@@ -661,14 +662,14 @@ selected_filter_halo(const FilterOptions& base)
 bool
 selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                            const ImageBuf& albedo, const Guides& guides,
-                           const FilterOptions& options, ROI roi, int nthreads,
-                           FilterStats& totals)
+                           const FilterOptions& options, ROI roi,
+                           const ROI& counted, int nthreads, FilterStats& totals)
 {
     // Cancelled (FilterOptions::cancel): false between stages, and the
     // stages that take long (candidate 0, the feature regressions) stop
     // within; regression_filter() gives the message.
     auto stopped = [&] { return cancel_requested(options); };
-    Selection S(dst, quotient, albedo, guides, options, roi, nthreads);
+    Selection S(dst, quotient, albedo, guides, options, roi, counted, nthreads);
     Candidate0 c0;
     if (!run_candidate0(S, totals, c0) || stopped())
         return false;

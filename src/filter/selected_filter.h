@@ -18,11 +18,13 @@ int selected_filter_halo(const FilterOptions& base);
 
 /// regression_filter() with select = 1, after its argument checks: `options`
 /// has its frame defined, `roi` lies in it, dst is prepared. Adds the
-/// statistics of roi's windows (candidate 0's) and pixels to totals.
+/// statistics of the windows (candidate 0's) and pixels in `counted` to
+/// totals.
 bool selected_regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                                 const ImageBuf& albedo, const Guides& guides,
                                 const FilterOptions& options, ROI roi,
-                                int nthreads, FilterStats& totals);
+                                const ROI& counted, int nthreads,
+                                FilterStats& totals);
 
 }  // namespace detail
 }  // namespace zdenoise
