@@ -23,6 +23,17 @@ using namespace detail;
 
 namespace {
 
+/// The filter's options for a coverage: no energy correction (a coverage
+/// is no light; docs/FILTER.md section 7b).
+FilterOptions
+coverage_options(const FilterOptions& options)
+{
+    FilterOptions o = options;
+    o.energy_radius = 0;
+    return o;
+}
+
+
 /// The coverage over `region`, a pixel a float (NaN beyond the image).
 struct CoveragePlane {
     ROI region;
@@ -81,9 +92,7 @@ alpha_halo(const FilterOptions& options)
 {
     // keep_structure() reads the filtered coverage one pixel beyond the
     // output, which the filter computes from its own halo around that.
-    FilterOptions coverage = options;
-    coverage.energy_radius = 0;  // denoise_alpha(): a coverage is no light
-    return filter_halo(coverage) + 1;
+    return filter_halo(coverage_options(options)) + 1;
 }
 
 
@@ -124,12 +133,11 @@ denoise_alpha(ImageBuf& dst, const ImageBuf& alpha, const Guides& guides,
     Guides g;
     g.normal    = guides.normal;
     g.object_id = guides.object_id;
-    FilterOptions o = options;
+    FilterOptions o = coverage_options(options);
     o.frame         = frame;
     o.progress      = nullptr;
     o.diagnostics   = nullptr;
     o.hat_diagonal  = nullptr;
-    o.energy_radius = 0;  // a coverage is no light (section 7b keeps energy)
     ImageBuf kept;
     if (!denoise(filtered, light, albedo, g, o, nullptr, halo_region(roi, frame, 1),
                  nthreads)

@@ -158,6 +158,10 @@ correct_energy(ImageBuf& dst, const ImageBuf& filtered, const ImageBuf& quotient
     const std::vector<float> zin  = read_channels(quotient, area, 0, 3);
     const std::vector<float> zout = read_channels(filtered, area, 0, 3);
     const std::vector<float> alb  = read_channels(albedo, area, 0, 3);
+    auto changed = [&](size_t i) {
+        return zin[3 * i] != zout[3 * i] || zin[3 * i + 1] != zout[3 * i + 1]
+               || zin[3 * i + 2] != zout[3 * i + 2];
+    };
     // The light in and out where the filter changed a pixel (the mask).
     std::vector<float> lin(npix, 0.0f), lout(npix, 0.0f), mask(npix, 0.0f);
     for_ranges(npix, nthreads, [&](size_t b, size_t e) {
@@ -165,10 +169,7 @@ correct_energy(ImageBuf& dst, const ImageBuf& filtered, const ImageBuf& quotient
             const float* a = &alb[3 * i];
             const float li = radiance_luminance(&zin[3 * i], a, albedo_eps);
             const float lo = radiance_luminance(&zout[3 * i], a, albedo_eps);
-            const bool changed = zin[3 * i] != zout[3 * i]
-                                 || zin[3 * i + 1] != zout[3 * i + 1]
-                                 || zin[3 * i + 2] != zout[3 * i + 2];
-            if (changed && std::isfinite(li) && std::isfinite(lo)) {
+            if (changed(i) && std::isfinite(li) && std::isfinite(lo)) {
                 lin[i]  = li;
                 lout[i] = lo;
                 mask[i] = 1.0f;
@@ -187,23 +188,24 @@ correct_energy(ImageBuf& dst, const ImageBuf& filtered, const ImageBuf& quotient
         blur(*v, w, h, radius, nthreads);
     const double square_sum = blur_square_sum(radius);
 
+    // roi's RGB, as filtered (what `filtered` holds there) and corrected.
     ROI rgb = roi;
     rgb.chbegin = 0;
     rgb.chend   = 3;
-    std::vector<float> out = read_channels(dst, rgb, 0, 3);
     const int rw = roi.width();
+    std::vector<float> out(3 * size_t(rw) * size_t(roi.height()));
     for_ranges(size_t(roi.height()), nthreads, [&](size_t b, size_t e) {
         for (size_t ry = b; ry < e; ++ry)
             for (int rx = 0; rx < rw; ++rx) {
                 const int x = roi.xbegin + rx, y = roi.ybegin + int(ry);
                 const size_t i = size_t(y - area.ybegin) * size_t(w)
                                  + size_t(x - area.xbegin);
+                float* o = &out[3 * (ry * size_t(rw) + size_t(rx))];
+                for (int c = 0; c < 3; ++c)
+                    o[c] = zout[3 * i + size_t(c)];
                 const double m = mask[i];
-                if (zin[3 * i] == zout[3 * i] && zin[3 * i + 1] == zout[3 * i + 1]
-                    && zin[3 * i + 2] == zout[3 * i + 2])
+                if (!changed(i) || !(m > 0.0))
                     continue;  // left as it was: not ours to change
-                if (!(m > 0.0))
-                    continue;
                 const double mi = lin[i] / m, mo = lout[i] / m;
                 if (!(mi > 0.0) || !(mo > 0.0))
                     continue;
@@ -217,7 +219,6 @@ correct_energy(ImageBuf& dst, const ImageBuf& filtered, const ImageBuf& quotient
                 const double change = (k - 1.0) * own_light[i];
                 if (std::abs(change) > sd && own_light[i] > 0.0f)
                     k = 1.0 + std::copysign(sd, change) / own_light[i];
-                float* o = &out[3 * (ry * size_t(rw) + size_t(rx))];
                 for (int c = 0; c < 3; ++c)
                     o[c] = float(o[c] * k);
             }

@@ -21,11 +21,11 @@ energy_reach(int radius)
     return radius > 0 ? 3 * radius + 1 : 0;
 }
 
-/// Section 7b over roi: dst's channels 0-2 (the filtered quotient over
-/// roi) scaled by the correction read from `filtered` (the filter's result
-/// over `area`: roi widened by energy_reach(), clipped to the frame; it
-/// holds roi too), `quotient` and `albedo` over `area`. Pixels the filter
-/// left as they were are neither read nor changed.
+/// Section 7b over roi: dst's channels 0-2 set to `filtered`'s (the
+/// filter's result over `area`: roi widened by energy_reach(), clipped to
+/// the frame), scaled by the correction read from it and from `quotient`
+/// and `albedo` over `area`. Pixels the filter left as they were are
+/// neither read nor changed.
 void
 correct_energy(ImageBuf& dst, const ImageBuf& filtered, const ImageBuf& quotient,
                const ImageBuf& albedo, float albedo_eps, int radius, ROI roi,
