@@ -17,7 +17,8 @@ metal spheres); `--box 31` adds the relMSE of 31x31 box means (the image and the
 averaged over every 31x31 window: the low-frequency error, the blotches a per-pixel relMSE
 hides under the noise).
 
-A mode named `default` runs zdenoise with no flags. `--baseline BIN` adds a first column,
+A mode named `default` runs zdenoise with no flags; `LABEL=FLAGS` runs it with FLAGS
+(`--modes "default,r24=--energy-radius 24"`). `--baseline BIN` adds a first column,
 `today`: another build's zdenoise with no flags (the default before a change). `--oidn DIR`
 adds a last column: Intel OIDN 2.4 (--hdr, the file's own albedo and normal, as
 bench/peers.py runs it), and each column's relMSE ratio to it.
@@ -90,6 +91,15 @@ def cases(args):
             yield scene, spp, seed, path, ref
 
 
+def run(args, mode):
+    """(label, command) of one --modes entry: `M` is `--mode M` (`default`: no flags);
+    `LABEL=FLAGS` is zdenoise with FLAGS, split at spaces."""
+    if "=" in mode:
+        label, flags = mode.split("=", 1)
+        return label, [args.zdenoise] + flags.split()
+    return mode, [args.zdenoise] + ([] if mode == "default" else ["--mode", mode])
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--data", action="append", default=[])
@@ -113,8 +123,7 @@ def main():
     if not os.access(args.zdenoise, os.X_OK):
         print(f"path_mode.py: no zdenoise at {args.zdenoise}", file=sys.stderr)
         return 2
-    runs = ([("today", [args.baseline])] if args.baseline else []) + [
-        (m, [args.zdenoise] + ([] if m == "default" else ["--mode", m])) for m in modes]
+    runs = ([("today", [args.baseline])] if args.baseline else []) + [run(args, m) for m in modes]
     head = ["scene", "spp", "seed"]
     for label, _ in runs:
         head += [f"{label} relMSE", "ratio", "sunlit", "tiles worse (max)"] + extra
