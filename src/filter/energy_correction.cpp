@@ -30,33 +30,31 @@ namespace {
 void
 box_pass(std::vector<float>& v, int w, int h, int r, bool along_x, int nthreads)
 {
+    // How many of the box's 2 r + 1 pixels lie in [0, n).
+    auto inside = [r](int i, int n) { return std::min(i + r, n - 1) - std::max(i - r, 0) + 1; };
     std::vector<float> out(v.size());
     for_ranges(size_t(h), nthreads, [&](size_t b, size_t e) {
         std::vector<double> acc(static_cast<size_t>(w));
-        std::vector<int> count(static_cast<size_t>(w));
         for (size_t y = b; y < e; ++y) {
             std::fill(acc.begin(), acc.end(), 0.0);
-            std::fill(count.begin(), count.end(), 0);
             for (int d = -r; d <= r; ++d) {
                 if (along_x) {
                     const float* row = &v[y * size_t(w)];
-                    for (int x = std::max(0, -d); x < std::min(w, w - d); ++x) {
+                    for (int x = std::max(0, -d); x < std::min(w, w - d); ++x)
                         acc[size_t(x)] += row[x + d];
-                        ++count[size_t(x)];
-                    }
                 } else {
                     const int yn = int(y) + d;
                     if (yn < 0 || yn >= h)
                         continue;
                     const float* row = &v[size_t(yn) * size_t(w)];
-                    for (int x = 0; x < w; ++x) {
+                    for (int x = 0; x < w; ++x)
                         acc[size_t(x)] += row[x];
-                        ++count[size_t(x)];
-                    }
                 }
             }
+            const int rows = inside(int(y), h);
             for (int x = 0; x < w; ++x)
-                out[y * size_t(w) + size_t(x)] = float(acc[size_t(x)] / count[size_t(x)]);
+                out[y * size_t(w) + size_t(x)]
+                    = float(acc[size_t(x)] / (along_x ? inside(x, w) : rows));
         }
     });
     v.swap(out);
