@@ -125,6 +125,9 @@ denoise_layer(ImageBuf& dst, const Layer& layer, const Guides& shared,
     FilterOptions options = shared_options;
     if (layer.reflected)
         options.edge_k *= kReflectedEdgeScale;
+    // Direct light's thin shadows are structure, not noise (FILTER.md 14).
+    if (layer.direct)
+        options.directional_noise = 1;
     contribution = &out;
     bool ok             = true;
     if (!layer.divided) {

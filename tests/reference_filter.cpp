@@ -434,6 +434,54 @@ Filter::compute_noise()
         return robust(e, e_def);
     };
 
+    // FilterOptions::directional_noise: section 14's estimate on the fit
+    // points' zl: per direction the mean over the 5x5 on the pixel's
+    // surface of the squared second differences over 1.5, the smallest of
+    // the four (each with at least 3) over 0.743; NaN where none has 3.
+    auto directional = [&]() {
+        static const int dirs[4][2] = { { 1, 0 }, { 0, 1 }, { 1, 1 }, { 1, -1 } };
+        auto second = [&](int x, int y, int d, double& out) {
+            const int ax = x - dirs[d][0], ay = y - dirs[d][1];
+            const int bx = x + dirs[d][0], by = y + dirs[d][1];
+            if (!z.inside(ax, ay) || !z.inside(bx, by) || !fitpt(x, y)
+                || !fitpt(ax, ay) || !fitpt(bx, by)
+                || !same_surface_for_noise(x, y, ax, ay)
+                || !same_surface_for_noise(x, y, bx, by))
+                return false;
+            const double dd = zl(x, y) - 0.5 * (zl(ax, ay) + zl(bx, by));
+            out = dd * dd / 1.5;
+            return true;
+        };
+        std::vector<double> D(size_t(w) * h, std::nan(""));
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                if (!fitpt(x, y))
+                    continue;
+                double sum[4] = { 0, 0, 0, 0 };
+                int count[4]  = { 0, 0, 0, 0 };
+                for (int v = y - 2; v <= y + 2; ++v)
+                    for (int u = x - 2; u <= x + 2; ++u) {
+                        if (!z.inside(u, v) || !fitpt(u, v)
+                            || !same_surface_for_noise(x, y, u, v))
+                            continue;
+                        for (int d = 0; d < 4; ++d) {
+                            double e2;
+                            if (second(u, v, d, e2)) {
+                                sum[d] += e2;
+                                ++count[d];
+                            }
+                        }
+                    }
+                double best = std::nan("");
+                for (int d = 0; d < 4; ++d)
+                    if (count[d] >= 3 && !(best <= sum[d] / count[d]))
+                        best = sum[d] / count[d];
+                D[idx(x, y)] = best / 0.743;
+            }
+        return D;
+    };
+    auto own = [&]() { return opt.directional_noise ? directional() : from_image(); };
+
     if (g.variance || (g.half_a && g.half_b)) {
         std::vector<char> defined(size_t(w) * h, 0);
         for (int y = 0; y < h; ++y)
@@ -461,12 +509,13 @@ Filter::compute_noise()
             // Halves: the robust estimate of the pairs' squared differences,
             // and never below the image's own (which also sees structure).
             V = robust(V, defined);
-            const std::vector<double> own = from_image();
+            const std::vector<double> image = own();
             for (size_t i = 0; i < V.size(); ++i)
-                V[i] = std::max(V[i], own[i]);
+                if (image[i] > V[i] || std::isnan(V[i]))
+                    V[i] = image[i];
         }
     } else {
-        V = from_image();
+        V = own();
     }
     V_ = V;
     if (opt.outlier_spread)
@@ -479,7 +528,7 @@ Filter::compute_noise()
         for (int x = 0; x < w; ++x) {
             if (!fitpt(x, y))
                 continue;
-            int n = 0;
+            int n = 0, nv = 0;
             double sv = 0.0, sz = 0.0;
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dx = -1; dx <= 1; ++dx) {
@@ -487,10 +536,14 @@ Filter::compute_noise()
                     if (!z.inside(xn, yn) || !fitpt(xn, yn))
                         continue;
                     ++n;
-                    sv += V[idx(xn, yn)];
                     sz += zl(xn, yn);
+                    // An undefined V (NaN) takes no part, as in the library.
+                    if (!std::isnan(V[idx(xn, yn)])) {
+                        sv += V[idx(xn, yn)];
+                        ++nv;
+                    }
                 }
-            double vs = sv / n, zs = sz / n;
+            double vs = nv ? sv / nv : 0.0, zs = sz / n;
             Vs_[idx(x, y)]    = vs;
             sigma_[idx(x, y)] = std::sqrt(vs) / std::max(std::abs(zs), EPS);
         }

@@ -471,6 +471,18 @@ TEST(FilterReference, EstimatedNoiseWithQualityStops)
     }
 }
 
+TEST(FilterReference, DirectionalNoiseEstimate)
+{
+    // A direct layer's noise (FILTER.md 3, 14), alone and as the halves' floor.
+    Case q{ "staircase, 16 spp, guides, directional", synth::staircase(W, H, 6, { 16, 33 }) };
+    q.normal = q.depth = q.id = q.whole_denoise = true;
+    q.opt.directional_noise = 1;
+    run_case(q);
+    Case h{ "shadow edge, halves, directional", synth::shadow_edge(W, H, { 8, 34 }) };
+    h.halves = true, h.opt.directional_noise = 1;
+    run_case(h);
+}
+
 TEST(FilterReference, VarianceGuideWinsOverHalves)
 {
     Case k{ "texture, variance + halves", synth::fine_texture(W, H, { 16, 14 }) };

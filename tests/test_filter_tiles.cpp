@@ -107,19 +107,21 @@ TEST(FilterTiles, StripsGivenTheFrameEqualTheWholeFrame)
     const ImageBuf normal = synth::shifted(s.normal, 3, -5);
     const ImageBuf depth = synth::shifted(s.depth, 3, -5);
     const ImageBuf ids = synth::shifted(s.object_id, 3, -5);
-    // stride, edges, select, pyramid radius (docs/FILTER.md 5.1)
-    const int cases[][4] = { { 1, 1, 0, 0 }, { 3, 1, 0, 0 }, { 3, 0, 0, 0 },
-                             { 3, 1, 1, 0 }, { 3, 1, 1, 4 } };
-    for (const auto& [stride, edges, select, pyramid] : cases) {
+    // stride, edges, select, pyramid radius (docs/FILTER.md 5.1), the
+    // direct light's noise estimate (section 14, directional_noise)
+    const int cases[][5] = { { 1, 1, 0, 0, 0 }, { 3, 1, 0, 0, 0 }, { 3, 0, 0, 0, 0 },
+                             { 3, 1, 1, 0, 0 }, { 3, 1, 1, 4, 0 }, { 3, 1, 1, 0, 1 } };
+    for (const auto& [stride, edges, select, pyramid, directional] : cases) {
         SCOPED_TRACE(testing::Message() << "stride " << stride << " edges " << edges
                                         << " select " << select << " pyramid "
-                                        << pyramid);
+                                        << pyramid << " directional " << directional);
         zdenoise::FilterOptions opt;
         opt.r_max          = 6;
         opt.centre_stride  = stride;
         opt.stride_edges   = edges;
         opt.select         = select;
         opt.pyramid_radius = pyramid;
+        opt.directional_noise = directional;
         zdenoise::Guides g;
         g.normal    = &normal;
         g.depth     = &depth;

@@ -95,7 +95,7 @@ decode_filter_inputs(FilterInputs& in, ImageBuf& dst, const ImageBuf& quotient,
         return false;
     classify_pixels(in, z, alb, alpha, depth, opt.albedo_eps, nthreads);
     const RawVariance var = raw_variance(in, guides, alb, opt.albedo_eps,
-                                         nthreads);
+                                         opt.directional_noise != 0, nthreads);
     if (cancel_requested(opt))
         return false;
     if (opt.outlier_spread)

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 
+#include "directional_variance.h"
 #include "internal.h"
 #include "median_kernel.h"
 
@@ -227,6 +228,25 @@ variance_from_image(const FilterInputs& in, int nthreads)
 }
 
 
+RawVariance
+variance_directional(const FilterInputs& in, int nthreads)
+{
+    // The fit points' luminance on the filter's surfaces (same_surface()).
+    struct FitPoints {
+        const FilterInputs& in;
+        const ROI& region;
+        size_t index(int x, int y) const { return in.index(x, y); }
+        bool inside(int x, int y) const { return in.in_region(x, y); }
+        bool same_surface(size_t a, size_t b) const
+        {
+            return detail::same_surface(in, a, b);
+        }
+        float value(size_t i) const { return fit_point(in, i) ? in.zl[i] : kUndefined; }
+    };
+    return directional_variance(FitPoints { in, in.region }, nthreads);
+}
+
+
 void
 smooth_noise(FilterInputs& in, const RawVariance& var, int nthreads)
 {
@@ -266,21 +286,26 @@ smooth_noise(FilterInputs& in, const RawVariance& var, int nthreads)
 
 RawVariance
 raw_variance(const FilterInputs& in, const Guides& guides,
-             const std::vector<float>& albedo, float albedo_eps, int nthreads)
+             const std::vector<float>& albedo, float albedo_eps,
+             bool directional, int nthreads)
 {
+    auto own = [&] {
+        return directional ? variance_directional(in, nthreads)
+                           : variance_from_image(in, nthreads);
+    };
     if (guides.variance)
         return variance_from_guide(in, *guides.variance, albedo, albedo_eps);
     if (guides.half_a && guides.half_b) {
         RawVariance var = variance_from_halves(in, *guides.half_a,
                                                *guides.half_b, albedo,
                                                albedo_eps, nthreads);
-        const RawVariance own = variance_from_image(in, nthreads);
+        const RawVariance image = own();
         for (size_t i = 0; i < var.size(); ++i)
-            if (own[i] > var[i] || std::isnan(var[i]))
-                var[i] = own[i];
+            if (image[i] > var[i] || std::isnan(var[i]))
+                var[i] = image[i];
         return var;
     }
-    return variance_from_image(in, nthreads);
+    return own();
 }
 
 }  // namespace detail

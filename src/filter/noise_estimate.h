@@ -37,15 +37,23 @@ variance_from_halves(const FilterInputs& in, const ImageBuf& half_a,
 RawVariance
 variance_from_image(const FilterInputs& in, int nthreads);
 
+/// FilterOptions::directional_noise: section 14's estimate (the smallest
+/// of four directions' 5x5 pools of squared second differences,
+/// directional_variance.h) on the fit points' zl, in place of source 3.
+RawVariance
+variance_directional(const FilterInputs& in, int nthreads);
+
 /// The 3x3 smoothing of section 3: in.vs and in.sigma from `var`.
 void
 smooth_noise(FilterInputs& in, const RawVariance& var, int nthreads);
 
 /// Section 3: V from the first source `guides` has (with halves, never
-/// below the image's own estimate).
+/// below the image's own estimate); the image's own estimate is source 3,
+/// or variance_directional() when `directional`.
 RawVariance
 raw_variance(const FilterInputs& in, const Guides& guides,
-             const std::vector<float>& albedo, float albedo_eps, int nthreads);
+             const std::vector<float>& albedo, float albedo_eps,
+             bool directional, int nthreads);
 
 /// The median of the n > 0 values at v (the mean of the middle two for an
 /// even n); reorders them. The noise estimate's and the outlier test's.

@@ -85,6 +85,8 @@ check_options(ImageBuf& dst, const FilterOptions& o)
         return bad("outlier_spread", o.outlier_spread, "needs 0 or 1");
     if (o.select != 0 && o.select != 1)
         return bad("select", o.select, "needs 0 or 1");
+    if (o.directional_noise != 0 && o.directional_noise != 1)
+        return bad("directional_noise", o.directional_noise, "needs 0 or 1");
     if (o.energy_radius < 0 || o.energy_radius > 64)
         return bad("energy_radius", o.energy_radius, "needs 0 <= energy_radius <= 64");
     if (!finite_nonneg(o.quadrant_power))

@@ -20,6 +20,7 @@
 #include <limits>
 #include <vector>
 
+#include "filter/directional_variance.h"
 #include "filter/filter_inputs.h"
 #include "checks.h"
 #include "internal.h"
@@ -51,16 +52,6 @@ constexpr float kNormalCos = 0.9f;
 /// 2.511, measured 0.5 % worse on newspaper, whose light has little
 /// structure: Monte Carlo noise has heavier tails than the test assumes.)
 constexpr float kResidualLevel = 3.265f;
-/// Half-size of the box over which squared second differences are pooled.
-constexpr int kVarianceBox = 2;
-/// The mean of the smallest of the four directions' 5x5 pools of squared
-/// second differences (each over 1.5, unbiased alone) on unit Gaussian
-/// noise: the minimum of four is biased low by this factor
-/// (tests/test_significance.cpp measures it). The mean of the pools that
-/// agree with the smallest (within 3x), nearly unbiased, measured worse on
-/// the interiors (docs/FILTER.md section 14).
-constexpr float kMinimumOfFourBias = 0.743f;
-
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 /// The light over `region` (the part of the frame the input holds), as
@@ -78,6 +69,7 @@ struct LightPlane {
     {
         return size_t(y_ - region.ybegin) * size_t(w) + size_t(x - region.xbegin);
     }
+    float value(size_t i) const { return y[i]; }
     bool inside(int x, int y_) const
     {
         return x >= region.xbegin && x < region.xend && y_ >= region.ybegin
@@ -149,68 +141,12 @@ decode_light(LightPlane& p, ImageBuf& dst, const ImageBuf& light,
 }
 
 
-/// The squared second difference of y at (x, y_) along (dx, dy), over 1.5
-/// (its variance is 1.5 V on noise of variance V): NaN where a point is
-/// outside, not finite, or on another surface.
-float
-second_difference(const LightPlane& p, int x, int y_, int dx, int dy)
-{
-    if (!p.inside(x - dx, y_ - dy) || !p.inside(x + dx, y_ + dy))
-        return kNaN;
-    const size_t c = p.index(x, y_);
-    const size_t a = p.index(x - dx, y_ - dy);
-    const size_t b = p.index(x + dx, y_ + dy);
-    if (!p.same_surface(c, a) || !p.same_surface(c, b))
-        return kNaN;
-    const float d = p.y[c] - 0.5f * (p.y[a] + p.y[b]);
-    return d * d / 1.5f;  // NaN propagates from a non-finite y
-}
-
-
-/// V at every pixel: for each of four directions the mean, over the 5x5 on
-/// the pixel's surface, of the squared second differences along it; the
-/// smallest of the four (a shadow line or edge along one direction leaves
-/// that direction's differences at the noise), over its bias.
+/// V at every pixel (directional_variance.h): a shadow line or edge along
+/// one direction leaves that direction's differences at the noise.
 void
 estimate_variance(LightPlane& p, int nthreads)
 {
-    static const int kDirections[4][2] = { { 1, 0 }, { 0, 1 }, { 1, 1 }, { 1, -1 } };
-    const size_t n = p.region.npixels();
-    std::vector<float> e(4 * n);
-    for_rows(p.region, nthreads, [&](int y_) {
-        for (int x = p.region.xbegin; x < p.region.xend; ++x)
-            for (int d = 0; d < 4; ++d)
-                e[4 * p.index(x, y_) + size_t(d)]
-                    = second_difference(p, x, y_, kDirections[d][0],
-                                        kDirections[d][1]);
-    });
-    p.var.assign(n, kNaN);
-    for_rows(p.region, nthreads, [&](int y_) {
-        for (int x = p.region.xbegin; x < p.region.xend; ++x) {
-            const size_t c = p.index(x, y_);
-            float sum[4] = { 0, 0, 0, 0 };
-            int count[4] = { 0, 0, 0, 0 };
-            for (int v = y_ - kVarianceBox; v <= y_ + kVarianceBox; ++v)
-                for (int u = x - kVarianceBox; u <= x + kVarianceBox; ++u) {
-                    if (!p.inside(u, v))
-                        continue;
-                    const size_t i = p.index(u, v);
-                    if (!p.same_surface(c, i))
-                        continue;
-                    for (int d = 0; d < 4; ++d)
-                        if (std::isfinite(e[4 * i + size_t(d)])) {
-                            sum[d] += e[4 * i + size_t(d)];
-                            ++count[d];
-                        }
-                }
-            float best = kNaN;
-            for (int d = 0; d < 4; ++d)
-                if (count[d] >= 3 && !(best <= sum[d] / float(count[d])))
-                    best = sum[d] / float(count[d]);
-            if (std::isfinite(p.y[c]))
-                p.var[c] = best / kMinimumOfFourBias;
-        }
-    });
+    p.var = directional_variance(p, nthreads);
 }
 
 
@@ -359,7 +295,7 @@ int
 noise_variance_halo()
 {
     // The 5x5 pool of second differences.
-    return kVarianceBox + 1;
+    return kDirectionalBox + 1;
 }
 
 
@@ -385,7 +321,7 @@ int
 significance_halo()
 {
     // Search, its 3x3 test, and V there: the 5x5 of second differences.
-    return kSearch + 1 + kVarianceBox + 1;
+    return kSearch + 1 + kDirectionalBox + 1;
 }
 
 
