@@ -434,10 +434,10 @@ Filter::compute_noise()
         return robust(e, e_def);
     };
 
-    // FilterOptions::directional_noise: section 14's estimate on the fit
-    // points' zl: per direction the mean over the 5x5 on the pixel's
-    // surface of the squared second differences over 1.5, the smallest of
-    // the four (each with at least 3) over 0.743; NaN where none has 3.
+    // Section 14's estimate on the fit points' zl: per direction the mean
+    // over the 5x5 on the pixel's surface of the squared second differences
+    // over 1.5, the smallest of the four (each with at least 3) over 0.743;
+    // NaN where none has 3.
     auto directional = [&]() {
         static const int dirs[4][2] = { { 1, 0 }, { 0, 1 }, { 1, 1 }, { 1, -1 } };
         auto second = [&](int x, int y, int d, double& out) {
@@ -480,7 +480,17 @@ Filter::compute_noise()
             }
         return D;
     };
-    auto own = [&]() { return opt.directional_noise ? directional() : from_image(); };
+    // With directional_noise the smaller of the two (NaN: the other).
+    auto own = [&]() {
+        std::vector<double> v = from_image();
+        if (opt.directional_noise) {
+            const std::vector<double> d = directional();
+            for (size_t i = 0; i < v.size(); ++i)
+                if (d[i] < v[i])
+                    v[i] = d[i];
+        }
+        return v;
+    };
 
     if (g.variance || (g.half_a && g.half_b)) {
         std::vector<char> defined(size_t(w) * h, 0);

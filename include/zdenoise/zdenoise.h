@@ -131,16 +131,15 @@ struct FilterOptions {
     /// blotches of its uneven loss. Pixels the filter leaves as they were
     /// are not changed. It widens filter_halo() by 3 r + 1. At most 64.
     int energy_radius = 12;
-    /// 1 = the noise of the light is estimated from the image as
-    /// keep_structure() estimates it (docs/FILTER.md section 14: the
+    /// 1 = the noise of the light estimated from the image is also
+    /// estimated as keep_structure() does (docs/FILTER.md section 14: the
     /// smallest of four directions' 5x5 pools of squared second
-    /// differences), in place of the 5x5 median of the residuals against
-    /// the 8-neighbour mean (section 3, source 3), which reads a grid of
-    /// thin shadow lines as noise and lets the windows fill it in.
-    /// layered_denoise() sets it for a `direct` layer (measured:
-    /// bench/path_mode.md, "The direct light's noise"); 0, the default
-    /// elsewhere, for light with fireflies, which a mean of differences
-    /// reads as more noise than a median does.
+    /// differences), and the smaller of that and section 3's 5x5 median of
+    /// residuals is taken: the median reads a lattice of thin shadow lines
+    /// as noise and lets the windows fill it in. layered_denoise() sets it
+    /// for a `direct` layer (measured: bench/path_mode.md, "The direct
+    /// light's noise"); 0, the default elsewhere: for all light it was
+    /// worse (fireflies and sparse indirect light).
     int directional_noise = 0;
     /// 1 = each pixel takes, by its estimated error (Stein's unbiased risk
     /// estimate, or the halves' cross error when half_a and half_b are

@@ -289,9 +289,19 @@ raw_variance(const FilterInputs& in, const Guides& guides,
              const std::vector<float>& albedo, float albedo_eps,
              bool directional, int nthreads)
 {
+    // With `directional` (a direct layer's light), the smaller of the two
+    // estimates: each reads some structure as noise (the median a lattice
+    // of lines, the four directions' pools a line at another angle or a
+    // corner), and both are calibrated on noise alone.
     auto own = [&] {
-        return directional ? variance_directional(in, nthreads)
-                           : variance_from_image(in, nthreads);
+        RawVariance var = variance_from_image(in, nthreads);
+        if (directional) {
+            const RawVariance d = variance_directional(in, nthreads);
+            for (size_t i = 0; i < var.size(); ++i)
+                if (d[i] < var[i])
+                    var[i] = d[i];
+        }
+        return var;
     };
     if (guides.variance)
         return variance_from_guide(in, *guides.variance, albedo, albedo_eps);

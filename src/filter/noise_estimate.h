@@ -37,9 +37,9 @@ variance_from_halves(const FilterInputs& in, const ImageBuf& half_a,
 RawVariance
 variance_from_image(const FilterInputs& in, int nthreads);
 
-/// FilterOptions::directional_noise: section 14's estimate (the smallest
-/// of four directions' 5x5 pools of squared second differences,
-/// directional_variance.h) on the fit points' zl, in place of source 3.
+/// Section 14's estimate (the smallest of four directions' 5x5 pools of
+/// squared second differences, directional_variance.h) on the fit points'
+/// zl; NaN where no direction has three.
 RawVariance
 variance_directional(const FilterInputs& in, int nthreads);
 
@@ -49,7 +49,7 @@ smooth_noise(FilterInputs& in, const RawVariance& var, int nthreads);
 
 /// Section 3: V from the first source `guides` has (with halves, never
 /// below the image's own estimate); the image's own estimate is source 3,
-/// or variance_directional() when `directional`.
+/// or, when `directional`, the smaller of it and variance_directional().
 RawVariance
 raw_variance(const FilterInputs& in, const Guides& guides,
              const std::vector<float>& albedo, float albedo_eps,
