@@ -120,6 +120,23 @@ box_smoothed(const ImageBuf& img)
     return ImageBufAlgo::convolve(img, ImageBufAlgo::make_kernel("box", 5, 5));
 }
 
+/// `light` as a divided layer (Cycles' DiffDir) over `colour` through
+/// layered_denoise(), direct or not, back over `colour`: the filtered light.
+ImageBuf
+layer_light(const ImageBuf& light, const ImageBuf& colour, bool direct,
+            zdenoise::FilterStats* stats = nullptr)
+{
+    std::vector<zdenoise::Layer> layers(1);
+    layers[0].name     = "DiffDir";
+    layers[0].radiance = &light;
+    layers[0].albedo   = &colour;
+    layers[0].divided  = true;
+    layers[0].direct   = direct;
+    ImageBuf out = zdenoise::layered_denoise(layers, nullptr, {}, {}, stats);
+    EXPECT_FALSE(out.has_error()) << out.geterror();
+    return ImageBufAlgo::div(out, colour);
+}
+
 }  // namespace
 
 
@@ -295,17 +312,10 @@ TEST(Significance, ADirectLayerKeepsAThinShadowLineTheRegressionFillsIn)
     ImageBuf colour(ImageSpec(W, H, 3, TypeFloat));
     ImageBufAlgo::fill(colour, { 0.6f, 0.6f, 0.6f });
     auto run = [&](bool direct) {
-        std::vector<zdenoise::Layer> layers(1);
-        layers[0].name     = "DiffDir";
-        layers[0].radiance = &light;
-        layers[0].albedo   = &colour;
-        layers[0].divided  = true;
-        layers[0].direct   = direct;
         zdenoise::FilterStats stats;
-        ImageBuf out = zdenoise::layered_denoise(layers, nullptr, {}, {}, &stats);
-        EXPECT_FALSE(out.has_error()) << out.geterror();
+        ImageBuf out = layer_light(light, colour, direct, &stats);
         EXPECT_EQ(stats.kept_pixels > 0, direct);
-        return ImageBufAlgo::div(out, colour);
+        return out;
     };
     const ImageBuf regression = run(false), direct = run(true);
     EXPECT_GT(line_contrast_kept(direct, 12, 1), 0.9f);
@@ -657,15 +667,7 @@ TEST(Significance, TheDirectLightsNoiseEstimateKeepsALatticeOfShadowsThePooledOn
         EXPECT_LT(lattice_contrast_kept(pooled), 0.75f) << "seed " << seed;
         EXPECT_LT(synth::rel_mse(directional, truth) * 3.0, synth::rel_mse(pooled, truth))
             << "seed " << seed;
-        std::vector<zdenoise::Layer> layers(1);
-        layers[0].name     = "DiffDir";
-        layers[0].radiance = &light;
-        layers[0].albedo   = &colour;
-        layers[0].divided  = true;
-        layers[0].direct   = true;
-        const ImageBuf out = zdenoise::layered_denoise(layers, nullptr, {}, {});
-        ASSERT_FALSE(out.has_error()) << out.geterror();
-        EXPECT_GT(lattice_contrast_kept(ImageBufAlgo::div(out, colour)), 0.85f)
+        EXPECT_GT(lattice_contrast_kept(layer_light(light, colour, true)), 0.85f)
             << "seed " << seed << ": a direct layer";
     }
 }
