@@ -1135,7 +1135,9 @@ Filter::run(RefStats* stats, RefImage* diagnostics)
                             edge |= l == kEdge;
                         }
                     }
-                if (edge || !covered)
+                // stride_edges 2: beside an edge, a checkerboard of the cell.
+                const bool every = opt.stride_edges == 1 || (x0 % stride + y0 % stride) % 2 == 0;
+                if ((edge && every) || !covered)
                     centre(x0, y0);
             }
     }

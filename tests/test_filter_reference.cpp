@@ -291,7 +291,7 @@ TEST(FilterReference, StridedCentres)
     // 80x72 with r_max 8: blocks of 64 (66 at stride 3) columns by 32 (33)
     // rows, so cells straddle block borders in x and y.
     for (int stride : { 2, 3 })
-        for (int edges : { 1, 0 }) {
+        for (int edges : { 1, 0, 2 }) {
             const std::string name = "stride " + std::to_string(stride) + ", edges "
                                      + std::to_string(edges);
             Case k{ "shadow edge, 16 spp, " + name, synth::shadow_edge(80, 72, { 16, 40 }) };

@@ -39,7 +39,7 @@ TEST(FilterStride, SameResultForAnyThreadCountAndRoi)
     g.normal    = &s.normal;
     g.depth     = &s.depth;
     g.object_id = &s.object_id;
-    for (int edges : { 1, 0 }) {
+    for (int edges : { 1, 0, 2 }) {
     SCOPED_TRACE(testing::Message() << "stride_edges " << edges);
     const zdenoise::FilterOptions opt = strided(3, edges);
     ImageBuf one = zdenoise::denoise(s.noisy, s.albedo, g, opt, nullptr, {}, 1);
@@ -104,6 +104,28 @@ TEST(FilterStride, WithEdgesCloseToTheExactFilterWithHalfTheWindows)
     EXPECT_LT(lattice_stats.windows, exact_stats.windows / 4);
 }
 
+
+TEST(FilterStride, EveryOtherEdgeCentreKeepsTheStepsWithFewerWindows)
+{
+    // stride_edges 2: beside an edge only a checkerboard of the fit points
+    // is fitted; their windows' splats reach the points between, so the
+    // treads' edges stay as well filtered with a fraction of the windows.
+    synth::Scene s = synth::staircase(96, 96, 8, { 8, 31 });
+    zdenoise::Guides g;
+    g.normal = &s.normal;
+    g.depth  = &s.depth;
+    zdenoise::FilterStats every_stats, checker_stats;
+    ImageBuf every   = zdenoise::denoise(s.noisy, s.albedo, g, strided(3, 1), &every_stats);
+    ImageBuf checker = zdenoise::denoise(s.noisy, s.albedo, g, strided(3, 2), &checker_stats);
+    ASSERT_FALSE(checker.has_error()) << checker.geterror();
+    EXPECT_EQ(checker_stats.passthrough_pixels, 0) << "every pixel must receive a fit";
+    const double every_err   = synth::rel_mse(every, s.clean);
+    const double checker_err = synth::rel_mse(checker, s.clean);
+    EXPECT_LT(checker_err, every_err * 1.1)
+        << "checkerboard edge centres " << checker_err << " vs every one " << every_err;
+    EXPECT_LT(checker_stats.windows, every_stats.windows * 8 / 10)
+        << "the checkerboard must leave out edge windows";
+}
 
 TEST(FilterStride, ThinObjectsOffTheLatticeAreStillFiltered)
 {

@@ -75,7 +75,7 @@ option_ranges()
         { "quadrant_power", [](O& o, double v) { o.quadrant_power = float(v); }, { 0, 1, 3, 100 } },
         { "radius_growth", [](O& o, double v) { o.radius_growth = float(v); }, { 1, 1.5, 4 } },
         { "centre_stride", [](O& o, double v) { o.centre_stride = int(v); }, { 1, 2, 3, 8 } },
-        { "stride_edges", [](O& o, double v) { o.stride_edges = int(v); }, { 0, 1 } },
+        { "stride_edges", [](O& o, double v) { o.stride_edges = int(v); }, { 0, 1, 2 } },
         { "outlier_spread", [](O& o, double v) { o.outlier_spread = int(v); }, { 0, 1 } },
         { "value_noise", [](O& o, double v) { o.value_noise = int(v); }, { 0, 1 } },
         { "select", [](O& o, double v) { o.select = int(v); }, { 0, 1 } },

@@ -100,8 +100,10 @@ struct FilterOptions {
     int centre_stride = 3;
     /// With centre_stride > 1: 1 = a fit point is also a centre when a
     /// lattice window of its cell on its surface stopped at an edge (detail
-    /// keeps every window); 0 = the lattice only (2x faster again, up to
-    /// 27 % worse relMSE: a preview setting).
+    /// keeps every window); 2 = of those fit points, every other one (a
+    /// checkerboard: x + y even), whose splats reach the ones between
+    /// (docs/PERFORMANCE.md "Edge centres"); 0 = the lattice only (2x
+    /// faster again, up to 27 % worse relMSE: a preview setting).
     int stride_edges = 1;
     /// 1 = outliers (fireflies: a point above its neighbourhood's median by
     /// more than its noise allows, docs/FILTER.md section 3a) keep only the

@@ -77,8 +77,8 @@ check_options(ImageBuf& dst, const FilterOptions& o)
     if (o.centre_stride < 1 || o.centre_stride > 64)
         return bad("centre_stride", o.centre_stride,
                    "needs 1 <= centre_stride <= 64");
-    if (o.stride_edges != 0 && o.stride_edges != 1)
-        return bad("stride_edges", o.stride_edges, "needs 0 or 1");
+    if (o.stride_edges < 0 || o.stride_edges > 2)
+        return bad("stride_edges", o.stride_edges, "needs 0, 1 or 2");
     if (o.value_noise != 0 && o.value_noise != 1)
         return bad("value_noise", o.value_noise, "needs 0 or 1");
     if (o.outlier_spread != 0 && o.outlier_spread != 1)
