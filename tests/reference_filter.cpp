@@ -1136,7 +1136,7 @@ Filter::run(RefStats* stats, RefImage* diagnostics)
                         }
                     }
                 // stride_edges 2: beside an edge, a checkerboard of the cell.
-                const bool every = opt.stride_edges == 1 || (x0 % stride + y0 % stride) % 2 == 0;
+                const bool every = opt.stride_edges == 1 || (x0 + y0) % 2 == 0;
                 if ((edge && every) || !covered)
                     centre(x0, y0);
             }

@@ -102,8 +102,9 @@ struct FilterOptions {
     /// lattice window of its cell on its surface stopped at an edge (detail
     /// keeps every window); 2 = of those fit points, every other one (a
     /// checkerboard: x + y even), whose splats reach the ones between
-    /// (docs/PERFORMANCE.md "Edge centres"); 0 = the lattice only (2x
-    /// faster again, up to 27 % worse relMSE: a preview setting).
+    /// (0.83x the time on the 1080p frame, relMSE at most 1.013x;
+    /// docs/PERFORMANCE.md "The default now"); 0 = the lattice only (up
+    /// to 1.6x the relMSE: a preview setting).
     int stride_edges = 1;
     /// 1 = outliers (fireflies: a point above its neighbourhood's median by
     /// more than its noise allows, docs/FILTER.md section 3a) keep only the

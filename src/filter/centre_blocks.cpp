@@ -106,12 +106,12 @@ lattice_end(int last, int origin, int image_end, int stride)
 /// Strided centres: first the lattice points of the block, then every
 /// other fit point that the lattice windows of its cell cannot speak for:
 /// none of them is on its surface, or (stride_edges) one on its surface
-/// stopped at an edge (stride_edges 2: of these, the fit points whose
-/// offset in the cell, ox + oy, is even). The block's sides are multiples of the stride, so
-/// the lattice points of its cells are its own plus the first column and
-/// row of the next blocks, which are fitted here only to decide (the next
-/// blocks splat them). The decision is thus the same for any tile, strip
-/// or thread count.
+/// stopped at an edge (stride_edges 2: of these, the fit points of a
+/// checkerboard, x + y even from the frame's origin). The block's sides
+/// are multiples of the stride, so the lattice points of its cells are
+/// its own plus the first column and row of the next blocks, which are
+/// fitted here only to decide (the next blocks splat them). The decision
+/// is thus the same for any tile, strip or thread count.
 void
 fit_strided_centres(const BlockCentres& c, const ROI& image, int stride,
                     const FilterInputs& in, const FilterOptions& opt,
@@ -162,7 +162,9 @@ fit_strided_centres(const BlockCentres& c, const ROI& image, int stride,
             // stride_edges 2: beside an edge, every other fit point (a
             // checkerboard), whose windows' splats reach the points between.
             const bool edge_centre
-                = edge && (opt.stride_edges == 1 || ((ox + oy) & 1) == 0);
+                = edge
+                  && (opt.stride_edges == 1
+                      || ((x - image.xbegin + y - image.ybegin) & 1) == 0);
             if (edge_centre || !covered)
                 fit_centre(fitter, out, x, y, true, st);
         }
