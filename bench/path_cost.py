@@ -14,6 +14,9 @@ and prints each one's median wall time and peak RSS (/usr/bin/time -f '%e %M'), 
 zdenoise's ratios to beauty mode, to OIDN's process and filter, and to oiiotool.
 
     bench/path_cost.py --oidn OIDN_DIR [--in FRAME.exr] [--runs 3] [--threads 2]
+                       [--extra "LABEL=FLAGS" ...]
+
+Each --extra adds a zdenoise column with those flags (`--extra "edges 2=--stride-edges 2"`).
 
 OIDN_DIR: ../shared/peers/oidn-install.tar.zst extracted (bin/oidnDenoise). A yardstick run
 beside zdenoise, never part of it. Runs with Debian's /usr/bin/python3.
@@ -48,6 +51,8 @@ def main():
     ap.add_argument("--zdenoise", default=os.path.join(REPO, "build", "bin", "zdenoise"))
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--extra", action="append", default=[],
+                    help="LABEL=FLAGS: another zdenoise column with FLAGS")
     a = ap.parse_args()
     tmp = tempfile.mkdtemp(prefix="zd_path_cost_")
     pfm = os.path.join(tmp, "in")
@@ -69,6 +74,11 @@ def main():
         ("oiiotool read + write", ["oiiotool", a.frame, "--ch", rgba, "-o",
                                    os.path.join(tmp, "oiio.exr")], None),
     ]
+    for n, extra in enumerate(a.extra):
+        label, _, flags = extra.partition("=")
+        tools.insert(2 + n, (f"zdenoise {label}", [a.zdenoise, "--in", a.frame, "-o",
+                                                   os.path.join(tmp, f"extra{n}.exr"),
+                                                   "--threads", t] + flags.split(), None))
     walls = {name: [] for name, _, _ in tools}
     rss = {name: [] for name, _, _ in tools}
     oidn_filter = []
@@ -92,11 +102,12 @@ def main():
         med["oidn filter"] = statistics.median(oidn_filter)
         print(f"| OIDN's filter (its msec) | {med['oidn filter']:.2f} | "
               f"{' / '.join(f'{w:.2f}' for w in oidn_filter)} | |")
-    path, beauty = med[tools[0][0]], med[tools[1][0]]
-    print(f"\npath / beauty {path / beauty:.2f}; path / OIDN process "
-          f"{path / med[tools[2][0]]:.2f}; path / oiiotool {path / med[tools[3][0]]:.2f}"
-          + (f"; path / OIDN filter {path / med['oidn filter']:.2f}; beauty / OIDN filter "
-             f"{beauty / med['oidn filter']:.2f}" if oidn_filter else ""))
+    oidn, oiio = med[tools[-2][0]], med[tools[-1][0]]
+    print()
+    for name, _, _ in tools[:-2]:
+        print(f"{name}: {med[name] / med[tools[1][0]]:.2f}x beauty mode, "
+              f"{med[name] / oidn:.2f}x OIDN's process, {med[name] / oiio:.2f}x oiiotool"
+              + (f", {med[name] / med['oidn filter']:.2f}x OIDN's filter" if oidn_filter else ""))
     return 0
 
 
