@@ -102,7 +102,7 @@ struct FilterOptions {
     /// lattice window of its cell on its surface stopped at an edge (detail
     /// keeps every window); 2 = of those fit points, every other one (a
     /// checkerboard: x + y even), whose splats reach the ones between
-    /// (0.83x the time on the 1080p frame, relMSE at most 1.013x;
+    /// (0.82x the time on the 1080p frame, relMSE at most 1.013x;
     /// docs/PERFORMANCE.md "The default now"); 0 = the lattice only (up
     /// to 1.6x the relMSE: a preview setting).
     int stride_edges = 1;

@@ -326,7 +326,7 @@ options()
           "within 2% of the same relMSE; docs/PERFORMANCE.md)" }),
         parameter({ Kind::Whole, "--stride-edges", "stride-edges", FIELD(job.filter.stride_edges), "0|1|2",
           "Windows beside an edge: 1 at every pixel; 2 at every\n"
-          "other pixel (0.83x the time, relMSE 1.002x, at most\n"
+          "other pixel (0.82x the time, relMSE 1.002x, at most\n"
           "1.013x on 72 cases); 0 the lattice only (preview:\n"
           "up to 1.6x the relMSE) (1)" }),
         parameter({ Kind::Whole, "--outlier-spread", "outlier-spread", FIELD(job.filter.outlier_spread), "0|1",
