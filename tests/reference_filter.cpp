@@ -480,7 +480,8 @@ Filter::compute_noise()
             }
         return D;
     };
-    // With directional_noise the smaller of the two (NaN: the other).
+    // With directional_noise the smaller of the two; where the directional
+    // estimate is NaN (no direction has 3), the median's.
     auto own = [&]() {
         std::vector<double> v = from_image();
         if (opt.directional_noise) {

@@ -110,7 +110,8 @@ TEST(FilterTiles, StripsGivenTheFrameEqualTheWholeFrame)
     // stride, edges, select, pyramid radius (docs/FILTER.md 5.1), the
     // direct light's noise estimate (section 14, directional_noise)
     const int cases[][5] = { { 1, 1, 0, 0, 0 }, { 3, 1, 0, 0, 0 }, { 3, 0, 0, 0, 0 },
-                             { 3, 1, 1, 0, 0 }, { 3, 1, 1, 4, 0 }, { 3, 1, 1, 0, 1 }, { 3, 2, 1, 0, 0 } };
+                             { 3, 1, 1, 0, 0 }, { 3, 1, 1, 4, 0 }, { 3, 1, 1, 0, 1 },
+                             { 3, 2, 1, 0, 0 } };
     for (const auto& [stride, edges, select, pyramid, directional] : cases) {
         SCOPED_TRACE(testing::Message() << "stride " << stride << " edges " << edges
                                         << " select " << select << " pyramid "
