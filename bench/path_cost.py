@@ -9,9 +9,13 @@ passes, so that no flags filters it by path), runs alternately, --runs times eac
   oidnDenoise                Intel OIDN 2.4 --hdr with the file's albedo and normal, on PFMs
                              written beforehand (its process; its filter's own msec from -v 2)
   oiiotool                   reading the frame and writing its Combined RGBA
+  oiiotool, every channel    reading the frame and writing all of it (what zdenoise's
+                             output holds: the denoised beauty and every channel carried
+                             through): the floor of zdenoise's own reading and writing
 
-and prints each one's median wall time and peak RSS (/usr/bin/time -f '%e %M'), and
-zdenoise's ratios to beauty mode, to OIDN's process and filter, and to oiiotool.
+and prints each one's median wall time and peak RSS (/usr/bin/time -f '%e %M'), zdenoise's
+own read / denoise / write seconds (its -v line), and zdenoise's ratios to beauty mode, to
+OIDN's process and filter, and to oiiotool.
 
     bench/path_cost.py --oidn OIDN_DIR [--in FRAME.exr] [--runs 3] [--threads 2]
                        [--extra "LABEL=FLAGS" ...]
@@ -63,25 +67,29 @@ def main():
     rgba = ",".join(f"ViewLayer.Combined.{c}" for c in "RGBA")
     tools = [
         ("zdenoise (no flags: path)", [a.zdenoise, "--in", a.frame, "-o",
-                                       os.path.join(tmp, "path.exr"), "--threads", t], None),
+                                       os.path.join(tmp, "path.exr"), "--threads", t, "-v"], None),
         ("zdenoise --mode beauty", [a.zdenoise, "--in", a.frame, "-o",
                                     os.path.join(tmp, "beauty.exr"), "--threads", t,
-                                    "--mode", "beauty"], None),
+                                    "--mode", "beauty", "-v"], None),
         ("oidnDenoise (process)", [os.path.join(a.oidn, "bin", "oidnDenoise"), "--hdr",
                                    pfm + "_beauty.pfm", "--alb", pfm + "_alb.pfm", "--nrm",
                                    pfm + "_nrm.pfm", "--threads", t, "-v", "2", "-o",
                                    os.path.join(tmp, "oidn.pfm")], oidn_env),
-        ("oiiotool read + write", ["oiiotool", a.frame, "--ch", rgba, "-o",
+        ("oiiotool read + write", ["oiiotool", "--threads", t, a.frame, "--ch", rgba, "-o",
                                    os.path.join(tmp, "oiio.exr")], None),
+        ("oiiotool, every channel", ["oiiotool", "--threads", t, a.frame, "-o",
+                                     os.path.join(tmp, "oiio_all.exr")], None),
     ]
     for n, extra in enumerate(a.extra):
         label, _, flags = extra.partition("=")
         tools.insert(2 + n, (f"zdenoise {label}", [a.zdenoise, "--in", a.frame, "-o",
                                                    os.path.join(tmp, f"extra{n}.exr"),
-                                                   "--threads", t] + flags.split(), None))
+                                                   "--threads", t, "-v"] + flags.split(),
+                              None))
     walls = {name: [] for name, _, _ in tools}
     rss = {name: [] for name, _, _ in tools}
     oidn_filter = []
+    stages = {name: [] for name, _, _ in tools if name.startswith("zdenoise")}
     for _ in range(a.runs):
         for name, cmd, env in tools:
             wall, peak, out = timed(cmd, env)
@@ -91,6 +99,9 @@ def main():
                 ms = re.findall(r"msec=([\d.]+)", out)
                 if ms:
                     oidn_filter.append(float(ms[-1]) / 1000.0)
+            times = re.findall(r"read ([\d.]+)s, denoise ([\d.]+)s, write ([\d.]+)s", out)
+            if name in stages and times:
+                stages[name].append(tuple(float(v) for v in times[-1]))
     med = {n: statistics.median(v) for n, v in walls.items()}
     print(f"{a.frame}, {a.threads} threads, median of {a.runs} alternating runs\n")
     print("| tool | wall (s) | runs | peak RSS (MiB) |")
@@ -102,9 +113,16 @@ def main():
         med["oidn filter"] = statistics.median(oidn_filter)
         print(f"| OIDN's filter (its msec) | {med['oidn filter']:.2f} | "
               f"{' / '.join(f'{w:.2f}' for w in oidn_filter)} | |")
-    oidn, oiio = med[tools[-2][0]], med[tools[-1][0]]
+    print("\nzdenoise's own stages (its -v line), medians:\n")
+    print("| zdenoise | read (s) | denoise (s) | write (s) |")
+    print("|---|---|---|---|")
+    for name, runs in stages.items():
+        if runs:
+            print(f"| {name} | " + " | ".join(f"{statistics.median(r[k] for r in runs):.2f}"
+                                            for k in range(3)) + " |")
+    oidn, oiio = med[tools[-3][0]], med[tools[-2][0]]
     print()
-    for name, _, _ in tools[:-2]:
+    for name, _, _ in tools[:-3]:
         print(f"{name}: {med[name] / med[tools[1][0]]:.2f}x beauty mode, "
               f"{med[name] / oidn:.2f}x OIDN's process, {med[name] / oiio:.2f}x oiiotool"
               + (f", {med[name] / med['oidn filter']:.2f}x OIDN's filter" if oidn_filter else ""))
