@@ -65,18 +65,20 @@ def main():
     oidn_env = dict(os.environ, LD_LIBRARY_PATH=os.path.join(a.oidn, "lib"))
     t = str(a.threads)
     rgba = ",".join(f"ViewLayer.Combined.{c}" for c in "RGBA")
+    # The rows the ratios are taken against, by name.
+    beauty = "zdenoise --mode beauty"
+    oidn_name = "oidnDenoise (process)"
+    oiio_name = "oiiotool read + write"
     tools = [
         ("zdenoise (no flags: path)", [a.zdenoise, "--in", a.frame, "-o",
                                        os.path.join(tmp, "path.exr"), "--threads", t, "-v"], None),
-        ("zdenoise --mode beauty", [a.zdenoise, "--in", a.frame, "-o",
-                                    os.path.join(tmp, "beauty.exr"), "--threads", t,
-                                    "--mode", "beauty", "-v"], None),
-        ("oidnDenoise (process)", [os.path.join(a.oidn, "bin", "oidnDenoise"), "--hdr",
-                                   pfm + "_beauty.pfm", "--alb", pfm + "_alb.pfm", "--nrm",
-                                   pfm + "_nrm.pfm", "--threads", t, "-v", "2", "-o",
-                                   os.path.join(tmp, "oidn.pfm")], oidn_env),
-        ("oiiotool read + write", ["oiiotool", "--threads", t, a.frame, "--ch", rgba, "-o",
-                                   os.path.join(tmp, "oiio.exr")], None),
+        (beauty, [a.zdenoise, "--in", a.frame, "-o", os.path.join(tmp, "beauty.exr"),
+                  "--threads", t, "--mode", "beauty", "-v"], None),
+        (oidn_name, [os.path.join(a.oidn, "bin", "oidnDenoise"), "--hdr", pfm + "_beauty.pfm",
+                     "--alb", pfm + "_alb.pfm", "--nrm", pfm + "_nrm.pfm", "--threads", t,
+                     "-v", "2", "-o", os.path.join(tmp, "oidn.pfm")], oidn_env),
+        (oiio_name, ["oiiotool", "--threads", t, a.frame, "--ch", rgba, "-o",
+                     os.path.join(tmp, "oiio.exr")], None),
         ("oiiotool, every channel", ["oiiotool", "--threads", t, a.frame, "-o",
                                      os.path.join(tmp, "oiio_all.exr")], None),
     ]
@@ -89,13 +91,14 @@ def main():
     walls = {name: [] for name, _, _ in tools}
     rss = {name: [] for name, _, _ in tools}
     oidn_filter = []
-    stages = {name: [] for name, _, _ in tools if name.startswith("zdenoise")}
+    zdenoise_rows = [name for name, _, _ in tools if name.startswith("zdenoise")]
+    stages = {name: [] for name in zdenoise_rows}
     for _ in range(a.runs):
         for name, cmd, env in tools:
             wall, peak, out = timed(cmd, env)
             walls[name].append(wall)
             rss[name].append(peak)
-            if name.startswith("oidn"):
+            if name == oidn_name:
                 ms = re.findall(r"msec=([\d.]+)", out)
                 if ms:
                     oidn_filter.append(float(ms[-1]) / 1000.0)
@@ -120,11 +123,11 @@ def main():
         if runs:
             print(f"| {name} | " + " | ".join(f"{statistics.median(r[k] for r in runs):.2f}"
                                             for k in range(3)) + " |")
-    oidn, oiio = med[tools[-3][0]], med[tools[-2][0]]
     print()
-    for name, _, _ in tools[:-3]:
-        print(f"{name}: {med[name] / med[tools[1][0]]:.2f}x beauty mode, "
-              f"{med[name] / oidn:.2f}x OIDN's process, {med[name] / oiio:.2f}x oiiotool"
+    for name in zdenoise_rows:
+        print(f"{name}: {med[name] / med[beauty]:.2f}x beauty mode, "
+              f"{med[name] / med[oidn_name]:.2f}x OIDN's process, "
+              f"{med[name] / med[oiio_name]:.2f}x oiiotool"
               + (f", {med[name] / med['oidn filter']:.2f}x OIDN's filter" if oidn_filter else ""))
     return 0
 
