@@ -21,11 +21,15 @@ A mode named `default` runs zdenoise with no flags; `LABEL=FLAGS` runs it with F
 (`--modes "default,r24=--energy-radius 24"`). `--baseline BIN` adds a first column,
 `today`: another build's zdenoise with no flags (the default before a change). `--oidn DIR`
 adds a last column: Intel OIDN 2.4 (--hdr, the file's own albedo and normal, as
-bench/peers.py runs it), and each column's relMSE ratio to it.
+bench/peers.py runs it), and each column's relMSE ratio to it. With `--oidn`, `--targets`
+then prints issue 45's targets per scene (the first mode against OIDN, and against the
+second mode) and how many cases are within each limit.
 
     bench/path_mode.py --data ../shared/data --data /renders           # every case found
     bench/path_mode.py --data ../shared/data --spp 16 --seeds 1 --scenes zigzag_steps
     bench/path_mode.py --data RENDERS --modes default --baseline OLD/zdenoise --oidn OIDN_DIR
+    bench/path_mode.py --data ../shared/data --data RENDERS --modes default,beauty \
+        --oidn OIDN_DIR --box 31 --materials 20,21,22 --targets      # issue 45's table
 
 Runs with Debian's /usr/bin/python3 (OpenImageIO, numpy). Exit 0, or 2 on a setup error.
 """
@@ -91,6 +95,59 @@ def cases(args):
             yield scene, spp, seed, path, ref
 
 
+def print_targets(records, labels, args):
+    """Issue 45's targets, from the rows above: per scene the first run's relMSE over
+    OIDN's (seed 1 / seed 2) at each spp, its 31x31 box means' over OIDN's at the lowest
+    spp, its region's (--materials) over OIDN's, and its worst ratio to the second run
+    (beauty mode in `--modes default,beauty`); then how many cases pass each limit."""
+    first, second = labels[0], labels[1] if len(labels) > 1 else None
+    spps, seeds = sorted({r[1] for r in records}), sorted({r[2] for r in records})
+    head = ["scene"] + [f"{first} / OIDN, {n} spp" for n in spps]
+    head += [f"box{args.box} / OIDN, {spps[0]} spp"] if args.box else []
+    head += [f"region / OIDN, {n} spp" for n in spps] if args.materials else []
+    head += [f"{first} / {second}, worst"] if second else []
+    print()
+    print("| " + " | ".join(head) + " |")
+    print("|" + "---|" * len(head))
+    by = {(r[0], r[1], r[2]): r[3] for r in records}
+    nan = float("nan")
+    ratio = lambda n, key: n[0].get(key, nan) / n[-1].get(key, nan)
+    count = {"frame": [0, 0], "box": [0, 0], "region": [0, 0], "second": [0, 0]}
+
+    def tally(name, value, limit):
+        if value == value:  # NaN: no such column for this case
+            count[name][0] += value <= limit
+            count[name][1] += 1
+
+    def cell(scene, spp, key):
+        values = [ratio(by[scene, spp, s], key) if (scene, spp, s) in by else nan for s in seeds]
+        return "/".join(f"{v:.2f}" if v == v else "-" for v in values)
+
+    for scene in dict.fromkeys(r[0] for r in records):
+        cols = [scene] + [cell(scene, n, "whole") for n in spps]
+        cols += [cell(scene, spps[0], "box")] if args.box else []
+        cols += [cell(scene, n, "region") for n in spps] if args.materials else []
+        worst = [n[0]["whole"] / n[1]["whole"] for (sc, _, _), n in by.items() if sc == scene]
+        cols += [f"{max(worst):.3f}"] if second else []
+        print("| " + " | ".join(cols) + " |")
+    for (scene, spp, seed), n in by.items():
+        tally("frame", ratio(n, "whole"), 2.0 if spp == spps[0] else 1.25)
+        if args.box and spp == spps[0]:
+            tally("box", ratio(n, "box"), 1.25)
+        if args.materials and spp != spps[0]:
+            tally("region", ratio(n, "region"), 1.5)
+        if second:
+            tally("second", n[0]["whole"] / n[1]["whole"], 1.02)
+    print()
+    parts = [f"frame (2x at {spps[0]} spp, 1.25x above) {count['frame'][0]} of {count['frame'][1]} cases"]
+    if args.box:
+        parts.append(f"box means at {spps[0]} spp (1.25x) {count['box'][0]} of {count['box'][1]}")
+    if args.materials:
+        parts.append(f"region above {spps[0]} spp (1.5x) {count['region'][0]} of {count['region'][1]}")
+    if second:
+        parts.append(f"{first} at most 1.02x {second} {count['second'][0]} of {count['second'][1]}")
+    print("Within the limits: " + "; ".join(parts) + ".")
+
 def run(args, mode):
     """(label, command) of one --modes entry: `M` is `--mode M` (`default`: no flags);
     `LABEL=FLAGS` is zdenoise with FLAGS, split at spaces."""
@@ -112,6 +169,8 @@ def main():
     ap.add_argument("--oidn", help="extracted oidn-install directory: adds OIDN's column")
     ap.add_argument("--materials", default="", help="IndexMA values: adds their region's relMSE")
     ap.add_argument("--box", type=int, default=0, help="N: adds the relMSE of NxN box means")
+    ap.add_argument("--targets", action="store_true",
+                    help="with --oidn: then print issue 45's targets per scene (print_targets)")
     args = ap.parse_args()
     args.data = args.data or [os.path.join(REPO, "..", "shared", "data")]
     args.spp = [int(s) for s in args.spp.split(",")]
@@ -138,6 +197,7 @@ def main():
         import peers as peers_module
         peers = peers_module.Peers(argparse.Namespace(
             oidn=args.oidn, shared=os.path.join(REPO, "..", "shared")), tmp)
+    records = []
     for scene, spp, seed, path, ref_path in cases(args):
         ref = rgb(ref_path, "Combined")
         noisy = rgb(path, "Combined")
@@ -155,17 +215,24 @@ def main():
             region = np.isin(np.rint(index[..., 0]), args.materials) if index is not None else None
 
         def scores(img):
-            """relMSE, the sunlit region's, tiles worse, and the optional columns."""
+            """relMSE, the sunlit region's, tiles worse, and the optional columns
+            (as text, and as numbers in `record`, NaN where there is none)."""
             e = rel_error(img, ref)
             sunlit = float(e[sun].mean()) if sun is not None else float("nan")
-            extras = []
+            extras, numbers = [], {"whole": float(e.mean())}
             if args.materials:
-                extras.append(f"{e[region].mean():.5f}" if region is not None and region.any() else "-")
+                has = region is not None and region.any()
+                numbers["region"] = float(e[region].mean()) if has else float("nan")
+                extras.append(f"{numbers['region']:.5f}" if has else "-")
             if args.box:
-                extras.append(f"{rel_error(box_means(img, args.box), ref_box).mean():.6f}")
+                numbers["box"] = float(rel_error(box_means(img, args.box), ref_box).mean())
+                extras.append(f"{numbers['box']:.6f}")
+            record[-1].append(numbers)
             return float(e.mean()), sunlit, tiles_worse(img, noisy, ref), extras
 
         row, first, wholes = [scene, str(spp), str(seed)], None, []
+        records.append((scene, spp, seed, []))
+        record = records[-1]
         for label, cmd in runs:
             out = os.path.join(tmp, f"{label}.exr")
             subprocess.run(cmd + ["--in", path, "-o", out], check=True,
@@ -185,6 +252,8 @@ def main():
             row += [f"{whole:.5f}", f"{sunlit:.5f}", f"{worse} ({excess:.3f})"] + extras
             row += [f"{w / whole:.2f}" for w in wholes]
         print(" | ".join(row), flush=True)
+    if args.targets and peers:
+        print_targets(records, [label for label, _ in runs], args)
     return 0
 
 
