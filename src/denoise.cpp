@@ -1,8 +1,9 @@
 // Copyright zdenoise contributors.
 // SPDX-License-Identifier: BSD-3-Clause
 //
-// denoise(): demodulate, regression_filter, remodulate.
+// denoise(): demodulate, regression_filter, remodulate, bound_highlights.
 
+#include <zdenoise/highlights.h>
 #include <zdenoise/zdenoise.h>
 
 #include "checks.h"
@@ -52,15 +53,19 @@ detail::denoise_through(ImageBuf& dst, const ImageBuf& radiance,
         dst.errorfmt("{}", filtered.geterror());
         return false;
     }
-    if (remodulation) {
-        if (!detail::check_input(dst, *remodulation, opname,
-                                 "remodulation albedo", roi, 3))
-            return false;
-        return remodulate(dst, filtered, albedo, *remodulation,
-                          options.albedo_eps, roi, nthreads);
-    }
-    return remodulate(dst, filtered, albedo, options.albedo_eps, roi,
-                      nthreads);
+    if (remodulation
+        && !detail::check_input(dst, *remodulation, opname,
+                                "remodulation albedo", roi, 3))
+        return false;
+    const bool remodulated
+        = remodulation ? remodulate(dst, filtered, albedo, *remodulation,
+                                    options.albedo_eps, roi, nthreads)
+                       : remodulate(dst, filtered, albedo, options.albedo_eps,
+                                    roi, nthreads);
+    // A noisy albedo can remodulate the light around a pixel into a
+    // highlight the input does not have (docs/FILTER.md section 1a).
+    return remodulated
+           && bound_highlights(dst, radiance, opt.frame, roi, nthreads);
 }
 
 namespace {

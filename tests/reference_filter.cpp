@@ -8,6 +8,8 @@
 
 #include "reference_filter.h"
 
+#include <zdenoise/highlights.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -92,6 +94,26 @@ remodulate(const RefImage& z, const RefImage& La, float albedo_eps)
                 if (demod_channel(La, x, y, c, albedo_eps))
                     L.at(x, y, c) = z.at(x, y, c) * (La.at(x, y, c) + albedo_eps);
     return L;
+}
+
+RefImage
+bound_highlights(const RefImage& out, const RefImage& L)
+{
+    const int r = zdenoise::kHighlightRadius;
+    RefImage b  = out;
+    for (int y = 0; y < out.h; ++y)
+        for (int x = 0; x < out.w; ++x)
+            for (int c = 0; c < 3; ++c) {
+                float m = -std::numeric_limits<float>::infinity();
+                for (int v = std::max(y - r, 0); v <= std::min(y + r, L.h - 1); ++v)
+                    for (int u = std::max(x - r, 0); u <= std::min(x + r, L.w - 1); ++u)
+                        if (std::isfinite(L.at(u, v, c)))
+                            m = std::max(m, L.at(u, v, c));
+                float& o = b.at(x, y, c);
+                if (std::isfinite(m) && std::isfinite(o) && o > m)
+                    o = m;
+            }
+    return b;
 }
 
 // ---------------------------------------------------------------------------
@@ -1272,7 +1294,7 @@ denoise(const RefImage& L, const RefImage& La, const RefGuides& guides,
 {
     RefImage z  = demodulate(L, La, opt.albedo_eps);
     RefImage zf = regression_filter(z, La, guides, opt, stats);
-    return remodulate(zf, La, opt.albedo_eps);
+    return bound_highlights(remodulate(zf, La, opt.albedo_eps), L);
 }
 
 

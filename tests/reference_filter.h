@@ -72,6 +72,11 @@ struct RefStats {
 RefImage demodulate(const RefImage& L, const RefImage& La, float albedo_eps);
 RefImage remodulate(const RefImage& z, const RefImage& La, float albedo_eps);
 
+/// Section 1a: each of channels 0-2 of `out` lowered, where above, to the
+/// largest finite value of that channel of L within
+/// zdenoise::kHighlightRadius (clipped to the image).
+RefImage bound_highlights(const RefImage& out, const RefImage& L);
+
 /// Sections 2-7: the whole regression filter on the quotient z.
 /// Uses only the filter parameters of `opt` (progress is ignored).
 /// `diagnostics`, if not null, receives the maps of

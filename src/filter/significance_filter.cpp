@@ -396,9 +396,13 @@ keep_structure(ImageBuf& dst, const ImageBuf& light, const ImageBuf& smoothed,
             const float t = residual_statistic(p, s_y, x, y_);
             // A smoother's non-finite value never passes where the light
             // is finite: the significance filter takes its place.
-            const bool broken = !std::isfinite(s_y[p.index(x, y_)])
-                                && std::isfinite(p.y[p.index(x, y_)]);
-            if (!(t > kResidualLevel) && !broken) {
+            const size_t c   = p.index(x, y_);
+            const bool broken = !std::isfinite(s_y[c]) && std::isfinite(p.y[c]);
+            // Where the light has no noise (V 0: a clean emitter, an empty
+            // shadow), any change the smoother made is no noise removed,
+            // the pixel's own too.
+            const bool clean_changed = p.var[c] == 0.0f && s_y[c] != p.y[c];
+            if (!(t > kResidualLevel) && !broken && !clean_changed) {
                 // The smoother's residual is noise: keep its result.
                 std::copy(&s_rgb[at_around(x, y_)], &s_rgb[at_around(x, y_)] + 3, o);
                 continue;
