@@ -1,10 +1,11 @@
 // Copyright zdenoise contributors.
 // SPDX-License-Identifier: BSD-3-Clause
 //
-// radiance_bounds() (docs/FILTER.md section 13.2), by sliding extrema over
-// the rows, then the columns.
+// radiance_bounds() (docs/FILTER.md section 13.2), by sliding extrema
+// (sliding_extrema.h) over the rows, then the columns.
 
 #include "radiance_bounds.h"
+#include "sliding_extrema.h"
 
 #include <algorithm>
 #include <cstdint>
@@ -14,44 +15,6 @@ namespace zdenoise {
 namespace detail {
 
 using namespace OIIO;
-
-namespace {
-
-/// The least and the most of the elements within r of each of n elements
-/// (stride apart), the window clipped at both ends, by van Herk and
-/// Gil-Werman's block prefixes and suffixes: three comparisons an element
-/// whatever r. Exact, so any order gives the same floats.
-struct SlidingExtrema {
-    std::vector<float> prefix_lo, prefix_hi, suffix_lo, suffix_hi;
-    void run(const float* lo, const float* hi, int n, size_t stride, int r,
-             float* out_lo, float* out_hi)
-    {
-        const float inf = std::numeric_limits<float>::infinity();
-        const int k = 2 * r + 1, m = n + 2 * r;  // padded by r on each side
-        prefix_lo.resize(size_t(m)), prefix_hi.resize(size_t(m));
-        suffix_lo.resize(size_t(m)), suffix_hi.resize(size_t(m));
-        auto at_lo = [&](int i) { return i < r || i >= r + n ? inf : lo[size_t(i - r) * stride]; };
-        auto at_hi = [&](int i) { return i < r || i >= r + n ? -inf : hi[size_t(i - r) * stride]; };
-        for (int i = 0; i < m; ++i) {
-            const bool start = i % k == 0;
-            prefix_lo[size_t(i)] = start ? at_lo(i) : std::min(prefix_lo[size_t(i) - 1], at_lo(i));
-            prefix_hi[size_t(i)] = start ? at_hi(i) : std::max(prefix_hi[size_t(i) - 1], at_hi(i));
-        }
-        for (int i = m - 1; i >= 0; --i) {
-            const bool end = i % k == k - 1 || i == m - 1;
-            suffix_lo[size_t(i)] = end ? at_lo(i) : std::min(suffix_lo[size_t(i) + 1], at_lo(i));
-            suffix_hi[size_t(i)] = end ? at_hi(i) : std::max(suffix_hi[size_t(i) + 1], at_hi(i));
-        }
-        // Element i's window is [i, i + 2r] of the padded array.
-        for (int i = 0; i < n; ++i) {
-            out_lo[i] = std::min(suffix_lo[size_t(i)], prefix_lo[size_t(i + 2 * r)]);
-            out_hi[i] = std::max(suffix_hi[size_t(i)], prefix_hi[size_t(i + 2 * r)]);
-        }
-    }
-};
-
-}  // namespace
-
 
 void
 radiance_bounds(const FilterInputs& in, const ROI& out, int r_max,
