@@ -7,6 +7,7 @@
 // per-pixel images (V, Vs, sigma). All arithmetic in double.
 
 #include "reference_filter.h"
+#include "reference_box_core.h"
 
 #include <zdenoise/highlights.h>
 
@@ -140,6 +141,8 @@ public:
     }
 
     RefImage run(RefStats* stats, RefImage* diagnostics);
+    /// docs/FILTER.md section 1: the box core between sections 2-3 and 3a/7.
+    RefImage run_box(RefStats* stats);
 
 private:
     RefImage z;               // the quotient the fits read (outliers capped)
@@ -159,6 +162,10 @@ private:
     };
     std::vector<Outlier> outliers_;  // section 3a, raster order
     void split_outliers();
+    void classify_and_estimate(RefStats& st);  // sections 2 and 3
+    /// Sections 3a and 7: the outliers' spread added to acc / wsum.
+    RefImage finish(const std::vector<double>& acc, const std::vector<double>& wsum,
+                    RefStats& st);
 
     size_t idx(int x, int y) const { return size_t(y) * w + x; }
 
@@ -989,15 +996,14 @@ Filter::split_outliers()
         }
 }
 
-RefImage
-Filter::run(RefStats* stats, RefImage* diagnostics)
+void
+Filter::classify_and_estimate(RefStats& st)
 {
     // ---- section 2: pixel classes ----
     surface_.assign(size_t(w) * h, 0);
     fitpt_.assign(size_t(w) * h, 0);
     receiver_.assign(size_t(w) * h * 3, 0);
     zl_.assign(size_t(w) * h, 0.0);
-    RefStats st;
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             bool s             = compute_surface(x, y);
@@ -1023,7 +1029,13 @@ Filter::run(RefStats* stats, RefImage* diagnostics)
 
     // ---- section 3 ----
     compute_noise();
+}
 
+RefImage
+Filter::run(RefStats* stats, RefImage* diagnostics)
+{
+    RefStats st;
+    classify_and_estimate(st);
     // ---- sections 5 and 6: centres in raster order (or strided) ----
     std::vector<double> acc(size_t(w) * h * 3, 0.0), wsum(size_t(w) * h, 0.0);
     // Diagnostics (zdenoise.h, diagnostic_channels()): per pixel the sums
@@ -1165,6 +1177,82 @@ Filter::run(RefStats* stats, RefImage* diagnostics)
             }
     }
 
+    RefImage out = finish(acc, wsum, st);
+
+    if (diagnostics) {
+        *diagnostics = RefImage(w, h, 4, 0.0f);
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const double* d = &diag[idx(x, y) * 5];
+                const double ws = wsum[idx(x, y)];
+                if (fitpt(x, y))
+                    diagnostics->at(x, y, 2) = float(sigma(x, y));
+                if (!(ws > 0.0))
+                    continue;
+                int code = 1;  // the most splat weight; ties to the lower
+                for (int k = 2; k <= 3; ++k)
+                    if (d[1 + k] > d[1 + code])
+                        code = k;
+                diagnostics->at(x, y, 0) = float(d[0] / ws);
+                diagnostics->at(x, y, 1) = float(code);
+                diagnostics->at(x, y, 3) = float(d[1] / ws);
+            }
+    }
+    st.pixels      = int64_t(w) * h;
+    st.mean_radius = st.windows ? radius_sum / double(st.windows) : 0.0;
+    if (stats)
+        *stats = st;
+    return out;
+}
+
+RefImage
+Filter::run_box(RefStats* stats)
+{
+    RefStats st;
+    classify_and_estimate(st);
+    BoxInputs in;
+    in.w = w, in.h = h;
+    const size_t np = size_t(w) * h;
+    in.fit.assign(np, 0);
+    in.z.assign(3 * np, 0.0);
+    in.zl.assign(np, 0.0);
+    in.vs.assign(np, 0.0);
+    in.normal.assign(3 * np, 0.0);
+    in.invdepth.assign(np, 0.0);
+    in.albedo.assign(3 * np, 0.0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const size_t i = idx(x, y);
+            in.fit[i] = fitpt(x, y);
+            for (int c = 0; c < 3; ++c) {
+                if (in.fit[i])
+                    in.z[3 * i + c] = z.at(x, y, c);
+                if (receiver(x, y, c))
+                    in.albedo[3 * i + c] = double(La.at(x, y, c)) + double(opt.albedo_eps);
+            }
+            if (in.fit[i])
+                in.zl[i] = zl(x, y), in.vs[i] = Vs(x, y);
+            if (g.normal) {
+                const Normal n = normal_at(x, y);
+                for (int c = 0; c < 3 && !n.none; ++c)
+                    in.normal[3 * i + c] = n.n[c];
+            }
+            if (g.depth && surface(x, y))
+                in.invdepth[i] = zeta(x, y);
+        }
+    std::vector<double> acc, wsum;
+    box_core_light(in, opt, acc, wsum);
+    RefImage out = finish(acc, wsum, st);
+    st.pixels = int64_t(w) * h;
+    if (stats)
+        *stats = st;
+    return out;
+}
+
+RefImage
+Filter::finish(const std::vector<double>& acc, const std::vector<double>& wsum,
+               RefStats& st)
+{
     // ---- section 3a: the outliers' excess, spread ----
     std::vector<double> spread(size_t(w) * h * 3, 0.0);
     for (const Outlier& o : outliers_) {
@@ -1247,30 +1335,6 @@ Filter::run(RefStats* stats, RefImage* diagnostics)
             if (passthrough)
                 ++st.passthrough_pixels;
         }
-
-    if (diagnostics) {
-        *diagnostics = RefImage(w, h, 4, 0.0f);
-        for (int y = 0; y < h; ++y)
-            for (int x = 0; x < w; ++x) {
-                const double* d = &diag[idx(x, y) * 5];
-                const double ws = wsum[idx(x, y)];
-                if (fitpt(x, y))
-                    diagnostics->at(x, y, 2) = float(sigma(x, y));
-                if (!(ws > 0.0))
-                    continue;
-                int code = 1;  // the most splat weight; ties to the lower
-                for (int k = 2; k <= 3; ++k)
-                    if (d[1 + k] > d[1 + code])
-                        code = k;
-                diagnostics->at(x, y, 0) = float(d[0] / ws);
-                diagnostics->at(x, y, 1) = float(code);
-                diagnostics->at(x, y, 3) = float(d[1] / ws);
-            }
-    }
-    st.pixels      = int64_t(w) * h;
-    st.mean_radius = st.windows ? radius_sum / double(st.windows) : 0.0;
-    if (stats)
-        *stats = st;
     return out;
 }
 
@@ -1284,7 +1348,7 @@ regression_filter(const RefImage& z, const RefImage& La, const RefGuides& guides
     if (z.nch < 3 || La.nch < 3 || La.w != z.w || La.h != z.h)
         throw std::invalid_argument("regression_filter: bad inputs");
     Filter f(z, La, guides, opt);
-    const RefImage out = f.run(stats, diagnostics);
+    const RefImage out = opt.core ? f.run_box(stats) : f.run(stats, diagnostics);
     return opt.energy_radius > 0 ? correct_energy(z, out, La, opt) : out;
 }
 

@@ -238,6 +238,24 @@ write_hat_diagonal(ImageBuf& dst, const Splats& splats, ROI roi, int nthreads)
 
 
 bool
+detail::finish_filtered_light(ImageBuf& dst, const ImageBuf& quotient,
+                              const FilterInputs& in, const FilterOptions& opt,
+                              ROI roi, const ROI& counted, int nthreads,
+                              FilterStats& totals, std::vector<double>&& acc,
+                              std::vector<double>&& wsum)
+{
+    Splats splats(size_t(roi.width()) * size_t(roi.height()), false, false);
+    splats.acc  = std::move(acc);
+    splats.wsum = std::move(wsum);
+    spread_outliers(in, opt, roi, splats.spread, nthreads);
+    if (cancel_requested(opt))
+        return false;
+    return normalise_output(dst, quotient, in, opt, splats, roi, counted,
+                            nthreads, totals);
+}
+
+
+bool
 detail::filter_decoded(ImageBuf& dst, const ImageBuf& quotient,
                        const FilterInputs& in, const FilterOptions& opt,
                        ROI roi, const ROI& counted, int nthreads,

@@ -30,5 +30,16 @@ bool filter_decoded(ImageBuf& dst, const ImageBuf& quotient,
                     const ROI& counted, int nthreads, FilterStats& totals,
                     ImageBuf* hat, std::vector<double>* spread_light = nullptr);
 
+/// The last stages of a filter whose light over `roi` is acc / wsum (3
+/// doubles and 1 a pixel of roi): the outliers' light spread over it
+/// (section 3a), then the output normalised, passed through where wsum is
+/// 0 or a channel does not receive (section 7), into dst. Adds the pixel
+/// statistics of `counted` to totals. The box core's end (box_core.cpp).
+bool finish_filtered_light(ImageBuf& dst, const ImageBuf& quotient,
+                           const FilterInputs& in, const FilterOptions& opt,
+                           ROI roi, const ROI& counted, int nthreads,
+                           FilterStats& totals, std::vector<double>&& acc,
+                           std::vector<double>&& wsum);
+
 }  // namespace detail
 }  // namespace zdenoise

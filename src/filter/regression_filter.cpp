@@ -21,6 +21,7 @@
 
 #include <OpenImageIO/imagebufalgo_util.h>
 
+#include "box_core.h"
 #include "centre_blocks.h"
 #include "decode_inputs.h"
 #include "filter_inputs.h"
@@ -89,6 +90,10 @@ check_options(ImageBuf& dst, const FilterOptions& o)
         return bad("directional_noise", o.directional_noise, "needs 0 or 1");
     if (o.energy_radius < 0 || o.energy_radius > 64)
         return bad("energy_radius", o.energy_radius, "needs 0 <= energy_radius <= 64");
+    if (o.core != 0 && o.core != 1)
+        return bad("core", o.core, "needs 0 (windows) or 1 (box)");
+    if (o.box_radius < 1 || o.box_radius > 128)
+        return bad("box_radius", o.box_radius, "needs 1 <= box_radius <= 128");
     if (!finite_nonneg(o.quadrant_power))
         return bad("quadrant_power", o.quadrant_power,
                    "needs a finite number >= 0");
@@ -119,6 +124,22 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
 }
 
 
+/// The box core over roi (box_core.cpp), decoding the inputs over roi
+/// and its halo.
+bool
+box_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
+         const Guides& guides, const FilterOptions& opt, ROI roi,
+         const ROI& counted, int nthreads, FilterStats& totals)
+{
+    const ROI region = halo_region(roi, opt.frame, filter_halo(opt));
+    FilterInputs in;
+    return decode_filter_inputs(in, dst, quotient, albedo, guides, opt, region,
+                                nthreads)
+           && box_filter_decoded(dst, quotient, in, opt, roi, counted, nthreads,
+                                 totals);
+}
+
+
 /// The filter over `area` (select or not) into dst, in tiles: they bound
 /// the working memory whatever the frame size, and the result is exactly
 /// the whole-image one (section 8), so the tile size is not a parameter.
@@ -130,7 +151,8 @@ filter_tiles(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
              const ROI& counted, int nthreads, FilterStats& totals, ImageBuf* hat,
              const std::function<void(float)>& progress)
 {
-    const int side = tile_opt.select ? kSelectionTile : kFilterTile;
+    const int side = tile_opt.core ? kBoxTile
+                     : tile_opt.select ? kSelectionTile : kFilterTile;
     const int ntx  = (area.width() + side - 1) / side;
     const int nty  = (area.height() + side - 1) / side;
     const int ntiles = ntx * nty;
@@ -146,7 +168,10 @@ filter_tiles(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
                 progress((float(t) + f) / float(ntiles));
             };
         const bool done
-            = tile_opt.select
+            = tile_opt.core
+                  ? box_tile(dst, quotient, albedo, guides, tile_opt, tile,
+                             tile_counted, nthreads, totals)
+              : tile_opt.select
                   ? selected_regression_filter(dst, quotient, albedo, guides,
                                                tile_opt, tile, tile_counted,
                                                nthreads, totals)
@@ -231,6 +256,8 @@ filter_halo(const FilterOptions& options)
         inner.energy_radius = 0;
         return filter_halo(inner) + energy_reach(options.energy_radius);
     }
+    if (options.core)
+        return detail::box_core_halo(options);
     if (options.select) {
         FilterOptions base = options;
         base.select        = 0;
@@ -285,6 +312,11 @@ regression_filter(ImageBuf& dst, const ImageBuf& quotient,
                                         tile_opt.frame, opname))
         return false;
     ImageBuf* hat = options.hat_diagonal;
+    if (hat && options.core) {
+        dst.errorfmt("{}: option hat_diagonal is invalid with core 1: the box "
+                     "core's choice has no hat diagonal of its own", opname);
+        return false;
+    }
     if (hat && options.select) {
         dst.errorfmt("{}: option hat_diagonal is invalid with select 1: the "
                      "selection's output has no hat diagonal of its own",

@@ -122,6 +122,8 @@ Filter parameters (docs/FILTER.md):
 {--stride-edges}
 {--outlier-spread}
 {--select}
+{--core}
+{--box-radius}
 {--pyramid}
 
 Frame sequences (oiiotool's conventions) and batches:
@@ -345,6 +347,14 @@ options()
           "feature regressions, by its estimated error (SURE, or\n"
           "the halves' cross error; docs/FILTER.md section 13);\n"
           "0: today's filter alone, 1.5x faster (1)" }),
+        parameter({ Kind::Whole, "--core", "core", FIELD(job.filter.core), "0|1",
+          "1: the box core: regressions on position, normal and\n"
+          "depth over windows of radii 1..--box-radius from box\n"
+          "sums, per pixel the input or the radius of least\n"
+          "Stein's risk (docs/FILTER.md section 15); 0: the\n"
+          "windows of sections 2-13 (0)" }),
+        parameter({ Kind::Whole, "--box-radius", "box-radius", FIELD(job.filter.box_radius), "R",
+          "With --core 1: the largest window half-size (64)" }),
         always_written({ Kind::Whole, "--threads", "threads", FIELD(job.threads), "N",
           "Threads (default: all cores); results do not depend\n"
           "on it." }),

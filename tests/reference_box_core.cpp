@@ -1,0 +1,251 @@
+// Copyright zdenoise contributors.
+// SPDX-License-Identifier: BSD-3-Clause
+//
+// The box core, written plainly (docs/FILTER.md section 15): sums point by
+// point, Gaussian elimination instead of Cholesky, splats window by
+// window.
+
+#include "reference_box_core.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace zdenoise_ref {
+
+namespace {
+
+constexpr int K = 7;  // 1, x, y, normal, log(1 / depth)
+constexpr double kRidge[K] = { 0.0, 1e-2, 1e-2, 1e-4, 1e-4, 1e-4, 1e-6 };
+constexpr double LW[3] = { 0.2126, 0.7152, 0.0722 };
+
+struct Candidate {
+    int radius = 0;
+    std::vector<double> rgb, hat;  // NaN where no window reaches
+};
+
+void
+features(const BoxInputs& in, int x, int y, double f[K])
+{
+    const size_t i = size_t(y) * in.w + x;
+    f[0] = 1.0, f[1] = x, f[2] = y;
+    for (int c = 0; c < 3; ++c)
+        f[3 + c] = in.normal[3 * i + c];
+    f[6] = in.invdepth[i] > 0.0 ? std::log(in.invdepth[i]) : 0.0;
+}
+
+/// One window's fit: beta (3 x K, global features), its weight and mean
+/// leverage; false when it has fewer than 3 points.
+bool
+fit_window(const BoxInputs& in, int x0, int y0, int r, double beta[3][K],
+           double& weight, double& leverage)
+{
+    double n = 0, sf[K] = {}, sff[K][K] = {}, sfz[K][3] = {}, szz = 0;
+    for (int y = std::max(y0 - r, 0); y <= std::min(y0 + r, in.h - 1); ++y)
+        for (int x = std::max(x0 - r, 0); x <= std::min(x0 + r, in.w - 1); ++x) {
+            const size_t i = size_t(y) * in.w + x;
+            if (!in.fit[i])
+                continue;
+            double f[K];
+            features(in, x, y, f);
+            n += 1;
+            for (int j = 0; j < K; ++j) {
+                sf[j] += f[j];
+                for (int k = 0; k < K; ++k)
+                    sff[j][k] += f[j] * f[k];
+                for (int c = 0; c < 3; ++c)
+                    sfz[j][c] += f[j] * in.z[3 * i + c];
+            }
+            szz += in.zl[i] * in.zl[i];
+        }
+    if (n < 3)
+        return false;
+    constexpr int m = K - 1;
+    double a[m][m + 3], mean[K], zmean[3];
+    for (int j = 0; j < K; ++j)
+        mean[j] = sf[j] / n;
+    for (int c = 0; c < 3; ++c)
+        zmean[c] = sfz[0][c] / n;
+    double dof = 1.0;
+    for (int j = 0; j < m; ++j) {
+        for (int k = 0; k < m; ++k)
+            a[j][k] = sff[j + 1][k + 1] - n * mean[j + 1] * mean[k + 1];
+        const double ridge = n * kRidge[j + 1] + 1e-12;
+        if (a[j][j] > 0)
+            dof += a[j][j] / (a[j][j] + ridge);
+        a[j][j] += ridge;
+        for (int c = 0; c < 3; ++c)
+            a[j][m + c] = sfz[j + 1][c] - n * mean[j + 1] * zmean[c];
+    }
+    double g[m][3];
+    for (int j = 0; j < m; ++j)
+        for (int c = 0; c < 3; ++c)
+            g[j][c] = a[j][m + c];
+    // Gaussian elimination (the matrix is symmetric positive definite).
+    for (int p = 0; p < m; ++p)
+        for (int j = p + 1; j < m; ++j) {
+            const double factor = a[j][p] / a[p][p];
+            for (int k = p; k < m + 3; ++k)
+                a[j][k] -= factor * a[p][k];
+        }
+    double t[m][3];
+    for (int j = m - 1; j >= 0; --j)
+        for (int c = 0; c < 3; ++c) {
+            double v = a[j][m + c];
+            for (int k = j + 1; k < m; ++k)
+                v -= a[j][k] * t[k][c];
+            t[j][c] = v / a[j][j];
+        }
+    double zl = 0, explained = 0;
+    for (int c = 0; c < 3; ++c) {
+        beta[c][0] = zmean[c];
+        for (int j = 0; j < m; ++j) {
+            beta[c][j + 1] = t[j][c];
+            beta[c][0] -= t[j][c] * mean[j + 1];
+        }
+        zl += LW[c] * zmean[c];
+    }
+    for (int j = 0; j < m; ++j) {
+        double bl = 0, gl = 0;
+        for (int c = 0; c < 3; ++c)
+            bl += LW[c] * t[j][c], gl += LW[c] * g[j][c];
+        explained += bl * gl;
+    }
+    const double rss = szz - n * zl * zl - explained;
+    const double resid = std::max(rss, 0.0) / std::max(n - dof, 1.0) / (zl * zl + 1e-8);
+    weight   = 1.0 / (resid + 1e-3);
+    leverage = dof / n;
+    return true;
+}
+
+Candidate
+radius_candidate(const BoxInputs& in, int r)
+{
+    const int s = std::max(1, r / 4);
+    const size_t np = size_t(in.w) * in.h;
+    std::vector<double> sum(np * (3 * K + 2), 0.0);
+    for (int y0 = 0; y0 < in.h; y0 += s)
+        for (int x0 = 0; x0 < in.w; x0 += s) {
+            double beta[3][K], weight, leverage;
+            if (!fit_window(in, x0, y0, r, beta, weight, leverage))
+                continue;
+            for (int y = std::max(y0 - r, 0); y <= std::min(y0 + r, in.h - 1); ++y)
+                for (int x = std::max(x0 - r, 0); x <= std::min(x0 + r, in.w - 1); ++x) {
+                    double* p = &sum[(size_t(y) * in.w + x) * (3 * K + 2)];
+                    for (int c = 0; c < 3; ++c)
+                        for (int j = 0; j < K; ++j)
+                            p[c * K + j] += weight * beta[c][j];
+                    p[3 * K] += weight * leverage;
+                    p[3 * K + 1] += weight;
+                }
+        }
+    Candidate cand;
+    cand.radius = r;
+    cand.rgb.assign(3 * np, NAN);
+    cand.hat.assign(np, NAN);
+    for (int y = 0; y < in.h; ++y)
+        for (int x = 0; x < in.w; ++x) {
+            const size_t i = size_t(y) * in.w + x;
+            const double* p = &sum[i * (3 * K + 2)];
+            if (!(p[3 * K + 1] > 0))
+                continue;
+            double f[K];
+            features(in, x, y, f);
+            for (int c = 0; c < 3; ++c) {
+                double v = 0;
+                for (int j = 0; j < K; ++j)
+                    v += f[j] * p[c * K + j];
+                cand.rgb[3 * i + c] = v / p[3 * K + 1];
+            }
+            cand.hat[i] = p[3 * K] / p[3 * K + 1];
+        }
+    return cand;
+}
+
+double
+lum(const double* rgb)
+{
+    return LW[0] * rgb[0] + LW[1] * rgb[1] + LW[2] * rgb[2];
+}
+
+/// Each candidate's relMSE-weighted, clipped Stein risk at every fit point.
+std::vector<std::vector<double>>
+risks(const BoxInputs& in, const std::vector<Candidate>& cands, int pilot)
+{
+    const size_t np = size_t(in.w) * in.h;
+    std::vector<std::vector<double>> risk(cands.size(), std::vector<double>(np, 0.0));
+    for (size_t i = 0; i < np; ++i) {
+        if (!in.fit[i])
+            continue;
+        const double v = std::max(in.vs[i], 0.0), clip = 3.0 * std::sqrt(v);
+        double a = 0;
+        for (int c = 0; c < 3; ++c)
+            a += LW[c] * (in.albedo[3 * i + c] > 0 ? in.albedo[3 * i + c] : 1.0);
+        const double* pl = &cands[size_t(pilot)].rgb[3 * i];
+        const double light = std::isfinite(pl[0]) ? std::max(lum(pl), 0.0) : in.zl[i];
+        const double wr = a * a / (a * a * light * light + 1e-2);
+        for (size_t k = 0; k < cands.size(); ++k) {
+            const double d = std::clamp(lum(&cands[k].rgb[3 * i]) - in.zl[i], -clip, clip);
+            const double sure = d * d - v + 2 * v * cands[k].hat[i];
+            risk[k][i] = std::isfinite(sure) ? wr * sure : 1e30;
+        }
+    }
+    return risk;
+}
+
+}  // namespace
+
+
+void
+box_core_light(const BoxInputs& in, const zdenoise::FilterOptions& opt,
+               std::vector<double>& acc, std::vector<double>& wsum)
+{
+    const size_t np = size_t(in.w) * in.h;
+    std::vector<Candidate> cands(1);
+    cands[0].rgb = in.z;
+    cands[0].hat.assign(np, 1.0);
+    std::vector<int> radii;
+    for (int r = 1; r < opt.box_radius; r *= 2)
+        radii.push_back(r);
+    radii.push_back(opt.box_radius);
+    int pilot = 1;
+    for (size_t j = 0; j < radii.size(); ++j) {
+        cands.push_back(radius_candidate(in, radii[j]));
+        if (radii[j] <= 8)
+            pilot = int(j) + 1;
+    }
+    const auto risk = risks(in, cands, pilot);
+    acc.assign(3 * np, 0.0);
+    wsum.assign(np, 0.0);
+    constexpr int R = 5;  // the pooling's 11x11
+    for (int y = 0; y < in.h; ++y)
+        for (int x = 0; x < in.w; ++x) {
+            std::vector<double> pooled(cands.size(), 0.0);
+            int count = 0;
+            for (int v = std::max(y - R, 0); v <= std::min(y + R, in.h - 1); ++v)
+                for (int u = std::max(x - R, 0); u <= std::min(x + R, in.w - 1); ++u) {
+                    const size_t j = size_t(v) * in.w + u;
+                    count += in.fit[j];
+                    for (size_t k = 0; k < cands.size(); ++k)
+                        pooled[k] += risk[k][j];
+                }
+            const size_t i = size_t(y) * in.w + x;
+            int best = -1;
+            double best_risk = std::numeric_limits<double>::infinity();
+            for (size_t k = 0; k < cands.size(); ++k) {
+                const double* rgb = &cands[k].rgb[3 * i];
+                if (!(std::isfinite(rgb[0]) && std::isfinite(rgb[1]) && std::isfinite(rgb[2])))
+                    continue;
+                const double rk = count > 0 ? pooled[k] : -double(k);
+                if (rk < best_risk)
+                    best = int(k), best_risk = rk;
+            }
+            if (best < 0)
+                continue;
+            for (int c = 0; c < 3; ++c)
+                acc[3 * i + c] = cands[size_t(best)].rgb[3 * i + c];
+            wsum[i] = 1.0;
+        }
+}
+
+}  // namespace zdenoise_ref
