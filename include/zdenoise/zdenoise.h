@@ -154,13 +154,16 @@ struct FilterOptions {
     /// section 10).
     int select = 1;
     /// The filter's core: 0 = the windows above (the paper's adaptive
-    /// radius, docs/FILTER.md sections 2-13); 1 = the box core (section
-    /// 1): linear regressions on position, normal and depth over square
-    /// windows of radii 1, 2, 4, ... box_radius from box sums, whose cost
-    /// per pixel does not grow with the radius, and per pixel the input
-    /// or the radius of least estimated error (Stein's risk). With 1,
-    /// r_min, r_max (but for the outliers' spread), the stop criteria,
-    /// the weights' and the stride's options and select are not used.
+    /// radius, docs/FILTER.md sections 2-13), the default; 1 = the box
+    /// core (section 15, experimental): ridge regressions on position,
+    /// normal and depth over square windows of radii 1, 2, 4, ...
+    /// box_radius from box sums, whose cost per pixel does not grow with
+    /// the radius, and per pixel the input or the radius of least
+    /// estimated error (Stein's risk). Measured on the public set at 4,
+    /// 16 and 64 spp: 1.04-1.94x the default's relMSE, and slower in this
+    /// version (bench/results/2026-12-box-core-log.md). With 1, r_min,
+    /// r_max (but for the outliers' spread), the stop criteria, the
+    /// weights' and the stride's options and select are not used.
     int core = 0;
     /// The box core's largest window half-size (core 1). At most 128.
     int box_radius = 64;

@@ -348,11 +348,12 @@ options()
           "the halves' cross error; docs/FILTER.md section 13);\n"
           "0: today's filter alone, 1.5x faster (1)" }),
         parameter({ Kind::Whole, "--core", "core", FIELD(job.filter.core), "0|1",
-          "1: the box core: regressions on position, normal and\n"
-          "depth over windows of radii 1..--box-radius from box\n"
-          "sums, per pixel the input or the radius of least\n"
-          "Stein's risk (docs/FILTER.md section 15); 0: the\n"
-          "windows of sections 2-13 (0)" }),
+          "1: the box core, experimental: regressions on\n"
+          "position, normal and depth over windows of radii\n"
+          "1..--box-radius from box sums, per pixel the input or\n"
+          "the radius of least Stein's risk (docs/FILTER.md\n"
+          "section 15; today 1.04-1.94x the default's relMSE\n"
+          "and slower); 0: the windows of sections 2-13 (0)" }),
         parameter({ Kind::Whole, "--box-radius", "box-radius", FIELD(job.filter.box_radius), "R",
           "With --core 1: the largest window half-size (64)" }),
         always_written({ Kind::Whole, "--threads", "threads", FIELD(job.threads), "N",
