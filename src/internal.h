@@ -31,9 +31,9 @@ using OIIO::ROI;
 /// are larger (fewer pixels filtered twice) but as wide as a 2K frame.
 constexpr int kFilterTile    = 1024;
 constexpr int kSelectionTile = 2048;
-/// The box core's tiles (box_core.cpp): its planes are held over the
-/// tile and a halo of two windows of the largest radius, in doubles.
-constexpr int kBoxTile = 256;
+/// The box core's tiles (box_core.cpp): its radii up to 4 hold 50 planes
+/// of doubles over the tile and its pool and windows around it.
+constexpr int kBoxTile = 512;
 
 /// Parallel options that split a range of any length over the threads
 /// (nthreads 0: all). OIIO's default paropt runs a range of fewer than

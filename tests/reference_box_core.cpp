@@ -3,7 +3,7 @@
 //
 // The box core, written plainly (docs/FILTER.md section 15): sums point by
 // point, Gaussian elimination instead of Cholesky, splats window by
-// window.
+// window, cells' windows and splats cell by cell.
 
 #include "reference_box_core.h"
 
@@ -34,15 +34,16 @@ features(const BoxInputs& in, int x, int y, double f[K])
     f[6] = in.invdepth[i] > 0.0 ? std::log(in.invdepth[i]) : 0.0;
 }
 
-/// One window's fit: beta (3 x K, global features), its weight and mean
-/// leverage; false when it has fewer than 3 points.
+/// One window's fit over the pixels [xa, xb) x [ya, yb) (clipped to the
+/// image): beta (3 x K, global features), its weight and mean leverage;
+/// false when it has fewer than 3 points.
 bool
-fit_window(const BoxInputs& in, int x0, int y0, int r, double beta[3][K],
+fit_window(const BoxInputs& in, int xa, int xb, int ya, int yb, double beta[3][K],
            double& weight, double& leverage)
 {
     double n = 0, sf[K] = {}, sff[K][K] = {}, sfz[K][3] = {}, szz = 0;
-    for (int y = std::max(y0 - r, 0); y <= std::min(y0 + r, in.h - 1); ++y)
-        for (int x = std::max(x0 - r, 0); x <= std::min(x0 + r, in.w - 1); ++x) {
+    for (int y = std::max(ya, 0); y < std::min(yb, in.h); ++y)
+        for (int x = std::max(xa, 0); x < std::min(xb, in.w); ++x) {
             const size_t i = size_t(y) * in.w + x;
             if (!in.fit[i])
                 continue;
@@ -118,47 +119,117 @@ fit_window(const BoxInputs& in, int x0, int y0, int r, double beta[3][K],
     return true;
 }
 
+constexpr int kSplat = 3 * K + 2;  // w beta, w K/n, w
+
+/// Add a window's fit to the splat sums `p` (kSplat values).
+void
+add_fit(double* p, const double beta[3][K], double weight, double leverage)
+{
+    for (int c = 0; c < 3; ++c)
+        for (int j = 0; j < K; ++j)
+            p[c * K + j] += weight * beta[c][j];
+    p[3 * K] += weight * leverage;
+    p[3 * K + 1] += weight;
+}
+
+/// The light and hat diagonal at (x, y) from splat sums p.
+void
+read_light(const BoxInputs& in, int x, int y, const double* p, Candidate& cand)
+{
+    const size_t i = size_t(y) * in.w + x;
+    if (!(p[3 * K + 1] > 0))
+        return;
+    double f[K];
+    features(in, x, y, f);
+    for (int c = 0; c < 3; ++c) {
+        double v = 0;
+        for (int j = 0; j < K; ++j)
+            v += f[j] * p[c * K + j];
+        cand.rgb[3 * i + c] = v / p[3 * K + 1];
+    }
+    cand.hat[i] = p[3 * K] / p[3 * K + 1];
+}
+
+/// Radii up to 4: a window of (2r+1)^2 pixels at every pixel, each pixel
+/// the sum of the windows holding it.
+void
+pixel_candidate(const BoxInputs& in, int r, Candidate& cand)
+{
+    const size_t np = size_t(in.w) * in.h;
+    std::vector<double> sum(np * kSplat, 0.0);
+    for (int y0 = 0; y0 < in.h; ++y0)
+        for (int x0 = 0; x0 < in.w; ++x0) {
+            double beta[3][K], weight, leverage;
+            if (!fit_window(in, x0 - r, x0 + r + 1, y0 - r, y0 + r + 1, beta, weight, leverage))
+                continue;
+            for (int y = std::max(y0 - r, 0); y <= std::min(y0 + r, in.h - 1); ++y)
+                for (int x = std::max(x0 - r, 0); x <= std::min(x0 + r, in.w - 1); ++x)
+                    add_fit(&sum[(size_t(y) * in.w + x) * kSplat], beta, weight, leverage);
+        }
+    for (int y = 0; y < in.h; ++y)
+        for (int x = 0; x < in.w; ++x)
+            read_light(in, x, y, &sum[(size_t(y) * in.w + x) * kSplat], cand);
+}
+
+/// Larger radii: cells of s = r / 4 pixels from the image's origin; a
+/// window of 9 x 9 cells at every cell; each cell the sum of the windows
+/// within 4 cells; each pixel those sums interpolated bilinearly between
+/// the four nearest cell centres (indices clamped to the image's cells).
+void
+cell_candidate(const BoxInputs& in, int r, Candidate& cand)
+{
+    const int s = r / 4, R = 4;
+    const int nx = (in.w + s - 1) / s, ny = (in.h + s - 1) / s;
+    std::vector<double> fits(size_t(nx) * ny * kSplat, 0.0);
+    for (int J = 0; J < ny; ++J)
+        for (int I = 0; I < nx; ++I) {
+            double beta[3][K], weight, leverage;
+            if (fit_window(in, (I - R) * s, (I + R + 1) * s, (J - R) * s, (J + R + 1) * s,
+                           beta, weight, leverage))
+                add_fit(&fits[(size_t(J) * nx + I) * kSplat], beta, weight, leverage);
+        }
+    std::vector<double> cell(fits.size(), 0.0);
+    for (int J = 0; J < ny; ++J)
+        for (int I = 0; I < nx; ++I)
+            for (int v = std::max(J - R, 0); v <= std::min(J + R, ny - 1); ++v)
+                for (int u = std::max(I - R, 0); u <= std::min(I + R, nx - 1); ++u)
+                    for (int k = 0; k < kSplat; ++k)
+                        cell[(size_t(J) * nx + I) * kSplat + k]
+                            += fits[(size_t(v) * nx + u) * kSplat + k];
+    auto axis = [&](int p, int n, int& a, int& b, double& t) {
+        const double u = (p + 0.5) / s - 0.5;
+        const int lo   = int(std::floor(u));
+        t = u - lo;
+        a = std::clamp(lo, 0, n - 1);
+        b = std::clamp(lo + 1, 0, n - 1);
+    };
+    for (int y = 0; y < in.h; ++y)
+        for (int x = 0; x < in.w; ++x) {
+            int i0, i1, j0, j1;
+            double tx, ty;
+            axis(x, nx, i0, i1, tx);
+            axis(y, ny, j0, j1, ty);
+            double p[kSplat];
+            for (int k = 0; k < kSplat; ++k) {
+                auto at = [&](int I, int J) { return cell[(size_t(J) * nx + I) * kSplat + k]; };
+                p[k] = (1 - ty) * ((1 - tx) * at(i0, j0) + tx * at(i1, j0))
+                       + ty * ((1 - tx) * at(i0, j1) + tx * at(i1, j1));
+            }
+            read_light(in, x, y, p, cand);
+        }
+}
+
 Candidate
 radius_candidate(const BoxInputs& in, int r)
 {
-    const int s = std::max(1, r / 4);
-    const size_t np = size_t(in.w) * in.h;
-    std::vector<double> sum(np * (3 * K + 2), 0.0);
-    for (int y0 = 0; y0 < in.h; y0 += s)
-        for (int x0 = 0; x0 < in.w; x0 += s) {
-            double beta[3][K], weight, leverage;
-            if (!fit_window(in, x0, y0, r, beta, weight, leverage))
-                continue;
-            for (int y = std::max(y0 - r, 0); y <= std::min(y0 + r, in.h - 1); ++y)
-                for (int x = std::max(x0 - r, 0); x <= std::min(x0 + r, in.w - 1); ++x) {
-                    double* p = &sum[(size_t(y) * in.w + x) * (3 * K + 2)];
-                    for (int c = 0; c < 3; ++c)
-                        for (int j = 0; j < K; ++j)
-                            p[c * K + j] += weight * beta[c][j];
-                    p[3 * K] += weight * leverage;
-                    p[3 * K + 1] += weight;
-                }
-        }
     Candidate cand;
     cand.radius = r;
-    cand.rgb.assign(3 * np, NAN);
-    cand.hat.assign(np, NAN);
-    for (int y = 0; y < in.h; ++y)
-        for (int x = 0; x < in.w; ++x) {
-            const size_t i = size_t(y) * in.w + x;
-            const double* p = &sum[i * (3 * K + 2)];
-            if (!(p[3 * K + 1] > 0))
-                continue;
-            double f[K];
-            features(in, x, y, f);
-            for (int c = 0; c < 3; ++c) {
-                double v = 0;
-                for (int j = 0; j < K; ++j)
-                    v += f[j] * p[c * K + j];
-                cand.rgb[3 * i + c] = v / p[3 * K + 1];
-            }
-            cand.hat[i] = p[3 * K] / p[3 * K + 1];
-        }
+    cand.rgb.assign(3 * size_t(in.w) * in.h, NAN);
+    cand.hat.assign(size_t(in.w) * in.h, NAN);
+    if (r <= 4)
+        pixel_candidate(in, r, cand);
+    else
+        cell_candidate(in, r, cand);
     return cand;
 }
 

@@ -30,21 +30,33 @@ floor_div(int a, int b)
 constexpr int kColumnChunk = 64;
 
 /// The 1-D box sums of one line `src` of n values (`x0` the frame
-/// coordinate of its first) into `dst`; `pre` and `suf` hold n + 2r.
+/// coordinate of its first) into `dst` (which may be `src`); `line`, `pre`
+/// and `suf` hold n + 2r. A block starts where the frame coordinate is a
+/// multiple of 2r + 1; `phase` is the position within it.
 template<class T>
 void
-box_line(const T* src, T* dst, int n, int x0, int r, T* pre, T* suf)
+box_line(const T* src, T* dst, int n, int x0, int r, T* line, T* pre, T* suf)
 {
     const int w = 2 * r + 1, len = n + 2 * r;
-    auto block = [&](int k) { return floor_div(x0 + k - r, w); };
-    auto at    = [&](int k) { return k >= r && k < r + n ? src[k - r] : T(0); };
-    for (int k = 0; k < len; ++k)
-        pre[k] = (k > 0 && block(k) == block(k - 1)) ? pre[k - 1] + at(k) : at(k);
-    for (int k = len - 1; k >= 0; --k)
-        suf[k] = (k + 1 < len && block(k) == block(k + 1)) ? at(k) + suf[k + 1]
-                                                          : at(k);
-    for (int i = 0; i < n; ++i)
-        dst[i] = block(i) == block(i + 2 * r) ? suf[i] : suf[i] + pre[i + 2 * r];
+    std::fill(line, line + r, T(0));
+    std::copy(src, src + n, line + r);
+    std::fill(line + r + n, line + len, T(0));
+    const int first = ((x0 - r) % w + w) % w;  // phase of line[0]
+    int phase = first;
+    for (int k = 0; k < len; ++k) {
+        pre[k] = (k > 0 && phase != 0) ? pre[k - 1] + line[k] : line[k];
+        phase  = phase + 1 == w ? 0 : phase + 1;
+    }
+    phase = (first + len - 1) % w;
+    for (int k = len - 1; k >= 0; --k) {
+        suf[k] = (k + 1 < len && phase != w - 1) ? line[k] + suf[k + 1] : line[k];
+        phase  = phase == 0 ? w - 1 : phase - 1;
+    }
+    phase = first;
+    for (int i = 0; i < n; ++i) {
+        dst[i] = phase == 0 ? suf[i] : suf[i] + pre[i + 2 * r];
+        phase  = phase + 1 == w ? 0 : phase + 1;
+    }
 }
 
 /// The vertical pass over columns [c0, c1) of one plane (height h, width
@@ -107,13 +119,14 @@ box_sum_planes(const Planes<T>& in, Planes<T>& out, int x0, int y0, int r,
     // Horizontal pass into out, one task a row of a plane.
     const int64_t rows = int64_t(h) * in.count;
     OIIO::parallel_for(int64_t(0), rows, [&](int64_t t) {
-        thread_local std::vector<T> pre, suf;
+        thread_local std::vector<T> line, pre, suf;
+        line.resize(size_t(wd + 2 * r));
         pre.resize(size_t(wd + 2 * r));
         suf.resize(size_t(wd + 2 * r));
         const int k = int(t / h), y = int(t % h);
         box_line(in.plane(k) + size_t(y) * size_t(wd),
-                 out.plane(k) + size_t(y) * size_t(wd), wd, x0, r, pre.data(),
-                 suf.data());
+                 out.plane(k) + size_t(y) * size_t(wd), wd, x0, r, line.data(),
+                 pre.data(), suf.data());
     }, paropt_any_length(nthreads));
     // Vertical pass in place, one task a chunk of columns of a plane: a
     // chunk's column sums read only its own columns.
