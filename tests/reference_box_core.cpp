@@ -239,31 +239,6 @@ lum(const double* rgb)
     return LW[0] * rgb[0] + LW[1] * rgb[1] + LW[2] * rgb[2];
 }
 
-/// Each candidate's relMSE-weighted, clipped Stein risk at every fit point.
-std::vector<std::vector<double>>
-risks(const BoxInputs& in, const std::vector<Candidate>& cands, int pilot)
-{
-    const size_t np = size_t(in.w) * in.h;
-    std::vector<std::vector<double>> risk(cands.size(), std::vector<double>(np, 0.0));
-    for (size_t i = 0; i < np; ++i) {
-        if (!in.fit[i])
-            continue;
-        const double v = std::max(in.vs[i], 0.0), clip = 3.0 * std::sqrt(v);
-        double a = 0;
-        for (int c = 0; c < 3; ++c)
-            a += LW[c] * (in.albedo[3 * i + c] > 0 ? in.albedo[3 * i + c] : 1.0);
-        const double* pl = &cands[size_t(pilot)].rgb[3 * i];
-        const double light = std::isfinite(pl[0]) ? std::max(lum(pl), 0.0) : in.zl[i];
-        const double wr = a * a / (a * a * light * light + 1e-2);
-        for (size_t k = 0; k < cands.size(); ++k) {
-            const double d = std::clamp(lum(&cands[k].rgb[3 * i]) - in.zl[i], -clip, clip);
-            const double sure = d * d - v + 2 * v * cands[k].hat[i];
-            risk[k][i] = std::isfinite(sure) ? wr * sure : 1e30;
-        }
-    }
-    return risk;
-}
-
 }  // namespace
 
 
@@ -279,43 +254,89 @@ box_core_light(const BoxInputs& in, const zdenoise::FilterOptions& opt,
     for (int r = 1; r < opt.box_radius; r *= 2)
         radii.push_back(r);
     radii.push_back(opt.box_radius);
-    int pilot = 1;
+    int guide = 1;
     for (size_t j = 0; j < radii.size(); ++j) {
         cands.push_back(radius_candidate(in, radii[j]));
         if (radii[j] <= 8)
-            pilot = int(j) + 1;
+            guide = int(j) + 1;
     }
-    const auto risk = risks(in, cands, pilot);
-    acc.assign(3 * np, 0.0);
-    wsum.assign(np, 0.0);
-    constexpr int R = 5;  // the pooling's 11x11
+    const int nc = int(cands.size());
+    const Candidate& ref = cands[1];
+    auto finite3 = [](const double* v) {
+        return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
+    };
+    // The noise: radius 1's squared residuals over 1 - D, 5x5, at fit points.
+    std::vector<double> v(np, 0.0);
     for (int y = 0; y < in.h; ++y)
         for (int x = 0; x < in.w; ++x) {
-            std::vector<double> pooled(cands.size(), 0.0);
-            int count = 0;
-            for (int v = std::max(y - R, 0); v <= std::min(y + R, in.h - 1); ++v)
-                for (int u = std::max(x - R, 0); u <= std::min(x + R, in.w - 1); ++u) {
-                    const size_t j = size_t(v) * in.w + u;
-                    count += in.fit[j];
-                    for (size_t k = 0; k < cands.size(); ++k)
-                        pooled[k] += risk[k][j];
+            double num = 0, den = 0;
+            for (int b = std::max(y - 2, 0); b <= std::min(y + 2, in.h - 1); ++b)
+                for (int a = std::max(x - 2, 0); a <= std::min(x + 2, in.w - 1); ++a) {
+                    const size_t j = size_t(b) * in.w + a;
+                    const double l = lum(&ref.rgb[3 * j]);
+                    if (!in.fit[j] || !std::isfinite(l))
+                        continue;
+                    num += (in.zl[j] - l) * (in.zl[j] - l);
+                    den += 1.0 - ref.hat[j];
                 }
-            const size_t i = size_t(y) * in.w + x;
-            int best = -1;
-            double best_risk = std::numeric_limits<double>::infinity();
-            for (size_t k = 0; k < cands.size(); ++k) {
-                const double* rgb = &cands[k].rgb[3 * i];
-                if (!(std::isfinite(rgb[0]) && std::isfinite(rgb[1]) && std::isfinite(rgb[2])))
-                    continue;
-                const double rk = count > 0 ? pooled[k] : -double(k);
-                if (rk < best_risk)
-                    best = int(k), best_risk = rk;
-            }
-            if (best < 0)
+            v[size_t(y) * in.w + x] = num / std::max(den, 1e-9);
+        }
+    // Each candidate's risk against radius 1, the reference's own, the guide.
+    std::vector<std::vector<double>> risk(size_t(nc) + 1, std::vector<double>(np, 0.0));
+    std::vector<double> g(np), gv(np);
+    for (size_t i = 0; i < np; ++i) {
+        const double gl = lum(&cands[size_t(guide)].rgb[3 * i]);
+        const double gvar = v[i] * cands[size_t(guide)].hat[i];
+        g[i]  = std::isfinite(gl) ? gl : 0.0;
+        gv[i] = (std::isfinite(gvar) ? gvar : 0.0) + 1e-12;
+        if (!in.fit[i])
+            continue;
+        double a = 0;
+        for (int c = 0; c < 3; ++c)
+            a += LW[c] * (in.albedo[3 * i + c] > 0 ? in.albedo[3 * i + c] : 1.0);
+        const double light = std::isfinite(gl) ? std::max(gl, 0.0) : in.zl[i];
+        const double wl = a * a / (a * a * light * light + 1e-2);
+        const double l1 = lum(&ref.rgb[3 * i]), d1 = ref.hat[i];
+        for (int k = 0; k < nc; ++k) {
+            const double lk = lum(&cands[size_t(k)].rgb[3 * i]), dk = cands[size_t(k)].hat[i];
+            const double s = ((lk - l1) * (lk - l1) - v[i] * std::abs(dk - d1) + v[i] * dk) * wl;
+            risk[size_t(k)][i] = std::isfinite(s) ? s : 1e30;
+        }
+        const double own = v[i] * d1 * wl;
+        risk[size_t(nc)][i] = std::isfinite(own) ? own : 0.0;
+    }
+    // Pooled over the 11x11 of the same light; the candidates blended.
+    acc.assign(3 * np, 0.0);
+    wsum.assign(np, 0.0);
+    for (int y = 0; y < in.h; ++y)
+        for (int x = 0; x < in.w; ++x) {
+            const size_t p = size_t(y) * in.w + x;
+            std::vector<double> pooled(size_t(nc) + 1, 0.0);
+            for (int b = std::max(y - 5, 0); b <= std::min(y + 5, in.h - 1); ++b)
+                for (int a = std::max(x - 5, 0); a <= std::min(x + 5, in.w - 1); ++a) {
+                    const size_t q = size_t(b) * in.w + a;
+                    const double w = std::exp(-(g[q] - g[p]) * (g[q] - g[p]) / (4.0 * (gv[p] + gv[q])));
+                    for (int k = 0; k <= nc; ++k)
+                        pooled[size_t(k)] += w * risk[size_t(k)][q];
+                }
+            double least = std::numeric_limits<double>::infinity();
+            for (int k = 0; k < nc; ++k)
+                if (finite3(&cands[size_t(k)].rgb[3 * p]))
+                    least = std::min(least, pooled[size_t(k)]);
+            if (least == std::numeric_limits<double>::infinity())
                 continue;
+            double sum = 0;
+            for (int k = 0; k < nc; ++k) {
+                if (!finite3(&cands[size_t(k)].rgb[3 * p]))
+                    continue;
+                const double w = std::exp(-(pooled[size_t(k)] - least) / (0.3 * pooled[size_t(nc)] + 1e-30));
+                sum += w;
+                for (int c = 0; c < 3; ++c)
+                    acc[3 * p + c] += w * cands[size_t(k)].rgb[3 * p + c];
+            }
             for (int c = 0; c < 3; ++c)
-                acc[3 * i + c] = cands[size_t(best)].rgb[3 * i + c];
-            wsum[i] = 1.0;
+                acc[3 * p + c] /= sum;
+            wsum[p] = 1.0;
         }
 }
 

@@ -3,8 +3,8 @@
 //
 // box_filter_decoded(): the box core (docs/FILTER.md section 15): the
 // input and, for each radius 1, 2, 4, ... box_radius, box_candidate()
-// (box_regression.cpp); then pooled_risks(): Stein's risk of each,
-// pooled 11x11, and choose_candidates(): per pixel the least.
+// (box_regression.cpp); then blend_candidates() (box_choice.cpp): each
+// candidate's risk, pooled over the same light around, and their blend.
 
 #include "box_core.h"
 
@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 
+#include "box_choice.h"
 #include "box_regression.h"
 #include "box_sums.h"
 #include "decoded_filter.h"
@@ -24,24 +25,6 @@ namespace detail {
 using namespace OIIO;
 
 namespace {
-
-/// Half-size of the box over which the risks are pooled before the choice:
-/// 121 pixels. A pixel's risk is mostly noise; on the public set at 16 spp
-/// 11x11 chose better than 7x7 or 5x5 (bench/results/2026-12-box-core-log.md).
-constexpr int kRiskRadius = 5;
-
-/// The risk's residual z - out is clipped at this many noise deviations:
-/// Monte Carlo's heavy tails (a firefly below the outlier test's
-/// threshold) would otherwise decide a whole pooled box for the radius
-/// that follows it (the same measurement: 3 beat 2, 4 and no clip).
-constexpr double kClipSigmas = 3.0;
-
-/// The relative-error floor of relMSE (zmetrics' 0.01 on the radiance).
-constexpr double kRelFloor = 1e-2;
-
-/// The window weight's floor on its relative residual variance: windows
-/// that fit better than this are weighted alike.
-constexpr double kWeightFloor = 1e-3;
 
 /// The input as a candidate: z itself, hat diagonal 1.
 BoxCandidate
@@ -61,98 +44,7 @@ input_candidate(const FilterInputs& in, const ROI& rr)
     return cand;
 }
 
-/// The weight that turns an error of the light at pixel i into its share
-/// of the radiance's relMSE: a^2 / (a^2 L^2 + 0.01), with a the albedo's
-/// luminance and L the pilot light.
-double
-relative_weight(const FilterInputs& in, size_t i, double pilot)
-{
-    double a = 0.0;
-    for (int c = 0; c < 3; ++c) {
-        const float inv = in.inv_albedo[c][i];
-        a += double(kLumaWeights[c]) * (inv > 0.0f ? 1.0 / double(inv) : 1.0);
-    }
-    return a * a / (a * a * pilot * pilot + kRelFloor);
-}
-
-/// Stein's unbiased risk of each candidate at every fit point of rr,
-/// relMSE-weighted, summed over the 11x11 around each pixel (planes: one
-/// per candidate, then the count of fit points).
-Planes<double>
-pooled_risks(const FilterInputs& in, const std::vector<BoxCandidate>& cands,
-             const ROI& rr, int pilot, int nthreads)
-{
-    const int nc = int(cands.size());
-    Planes<double> risk(rr.width(), rr.height(), nc + 1);
-    for_rows(rr, nthreads, [&](int y) {
-        for (int x = rr.xbegin; x < rr.xend; ++x) {
-            const size_t i = in.index(x, y);
-            if (!(in.cls[i] & kFitPoint))
-                continue;
-            const size_t k = size_t(y - rr.ybegin) * size_t(rr.width())
-                             + size_t(x - rr.xbegin);
-            const double v  = std::max(double(in.vs[i]), 0.0);
-            const double clip = kClipSigmas * std::sqrt(v);
-            const float* pl = &cands[size_t(pilot)].rgb[3 * k];
-            const double wr = relative_weight(
-                in, i, std::isfinite(pl[0]) ? std::max(double(luminance(pl)), 0.0)
-                                            : double(in.zl[i]));
-            for (int c = 0; c < nc; ++c) {
-                const float* rgb = &cands[size_t(c)].rgb[3 * k];
-                const double d   = std::clamp(double(luminance(rgb)) - double(in.zl[i]),
-                                              -clip, clip);
-                const double sure = d * d - v + 2.0 * v * double(cands[size_t(c)].hat[k]);
-                risk.plane(c)[k] = std::isfinite(sure) ? wr * sure : 1e30;
-            }
-            risk.plane(nc)[k] = 1.0;
-        }
-    });
-    box_sum_planes(risk, risk, rr.xbegin - in.image.xbegin,
-                   rr.ybegin - in.image.ybegin, kRiskRadius, nthreads);
-    return risk;
-}
-
-/// Per output pixel the candidate of least pooled risk (ties: the first),
-/// its light into acc (3 a pixel of roi) and 1 into wsum; a pixel no
-/// candidate reaches keeps wsum 0 (passed through). `chosen` gets the
-/// radius (0: the input).
-void
-choose_candidates(const std::vector<BoxCandidate>& cands, const Planes<double>& risk,
-                  const ROI& rr, const ROI& roi, std::vector<double>& acc,
-                  std::vector<double>& wsum, std::vector<float>& chosen,
-                  int nthreads)
-{
-    const int nc = int(cands.size());
-    for_rows(roi, nthreads, [&](int y) {
-        for (int x = roi.xbegin; x < roi.xend; ++x) {
-            const size_t k = size_t(y - rr.ybegin) * size_t(rr.width())
-                             + size_t(x - rr.xbegin);
-            const size_t o = size_t(y - roi.ybegin) * size_t(roi.width())
-                             + size_t(x - roi.xbegin);
-            int best         = -1;
-            double best_risk = std::numeric_limits<double>::infinity();
-            const bool pooled = risk.plane(nc)[k] > 0.0;
-            for (int c = 0; c < nc; ++c) {
-                const float* rgb = &cands[size_t(c)].rgb[3 * k];
-                if (!(std::isfinite(rgb[0]) && std::isfinite(rgb[1])
-                      && std::isfinite(rgb[2])))
-                    continue;
-                // No fit point around: the widest candidate that reaches.
-                const double rk = pooled ? risk.plane(c)[k] : -double(c);
-                if (rk < best_risk)
-                    best = c, best_risk = rk;
-            }
-            if (best < 0)
-                continue;
-            for (int ch = 0; ch < 3; ++ch)
-                acc[3 * o + ch] = double(cands[size_t(best)].rgb[3 * k + ch]);
-            wsum[o]   = 1.0;
-            chosen[o] = float(cands[size_t(best)].radius);
-        }
-    });
-}
-
-/// The radius chosen as map 0 of opt.diagnostics, the noise as map 2.
+/// The blend's mean radius as map 0 of opt.diagnostics, the noise as map 2.
 bool
 write_box_diagnostics(ImageBuf& maps_img, const FilterInputs& in, const ROI& roi,
                       const std::vector<float>& chosen)
@@ -194,7 +86,7 @@ box_core_halo(const FilterOptions& opt)
     int reach = 0;
     for (int r : box_radii(opt))
         reach = std::max(reach, box_candidate_reach(r));
-    return reach + kRiskRadius + 6;
+    return reach + kChoiceReach + 6;
 }
 
 
@@ -203,7 +95,7 @@ box_filter_decoded(ImageBuf& dst, const ImageBuf& quotient,
                    const FilterInputs& in, const FilterOptions& opt, ROI roi,
                    const ROI& counted, int nthreads, FilterStats& totals)
 {
-    const ROI rr = roi_intersection(halo_region(roi, in.image, kRiskRadius),
+    const ROI rr = roi_intersection(halo_region(roi, in.image, kChoiceReach),
                                     in.region);
     const std::vector<int> radii = box_radii(opt);
     std::vector<BoxCandidate> cands { input_candidate(in, rr) };
@@ -215,15 +107,14 @@ box_filter_decoded(ImageBuf& dst, const ImageBuf& quotient,
         if (opt.progress)
             opt.progress(float(j + 1) / float(radii.size() + 1));
     }
-    // The pilot light of the relative weights: radius 8 or the nearest.
-    int pilot = 1;
+    // The pooling's guide: radius 8, or the largest below it.
+    int guide = 1;
     for (size_t j = 0; j < radii.size(); ++j)
         if (radii[j] <= 8)
-            pilot = int(j) + 1;
-    const Planes<double> risk = pooled_risks(in, cands, rr, pilot, nthreads);
+            guide = int(j) + 1;
     std::vector<double> acc(3 * roi.npixels(), 0.0), wsum(roi.npixels(), 0.0);
     std::vector<float> chosen(roi.npixels(), 0.0f);
-    choose_candidates(cands, risk, rr, roi, acc, wsum, chosen, nthreads);
+    blend_candidates(in, cands, guide, rr, roi, acc, wsum, chosen, nthreads);
     if (cancel_requested(opt))
         return false;
     if (opt.diagnostics
