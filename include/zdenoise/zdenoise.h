@@ -158,10 +158,11 @@ struct FilterOptions {
     /// core (section 15, experimental): ridge regressions on position,
     /// normal and depth over square windows of radii 1, 2, 4, ...
     /// box_radius from box sums, whose cost per pixel does not grow with
-    /// the radius, and per pixel the input or the radius of least
-    /// estimated error (Stein's risk). Measured on the public set at 4,
-    /// 16 and 64 spp: 1.04-1.94x the default's relMSE, and slower in this
-    /// version (bench/results/2026-12-box-core-log.md). With 1, r_min,
+    /// the radius, and per pixel a blend of the input and the radii by
+    /// their estimated risks (section 15.3). Measured on the public set at 4,
+    /// 16 and 64 spp: 0.95-1.16x the default's relMSE; worse on
+    /// bench/scenes/glass_cabin, and not faster in this version
+    /// (bench/results/2026-12-box-core-log.md). With 1, r_min,
     /// r_max (but for the outliers' spread), the stop criteria, the
     /// weights' and the stride's options and select are not used.
     int core = 0;

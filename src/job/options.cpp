@@ -350,10 +350,12 @@ options()
         parameter({ Kind::Whole, "--core", "core", FIELD(job.filter.core), "0|1",
           "1: the box core, experimental: regressions on\n"
           "position, normal and depth over windows of radii\n"
-          "1..--box-radius from box sums, per pixel the input or\n"
-          "the radius of least Stein's risk (docs/FILTER.md\n"
-          "section 15; today 1.04-1.94x the default's relMSE\n"
-          "and slower); 0: the windows of sections 2-13 (0)" }),
+          "1..--box-radius from box sums, per pixel a blend of\n"
+          "the input and the radii by their estimated risks\n"
+          "(docs/FILTER.md section 15; on the public set\n"
+          "0.95-1.16x the default's relMSE, worse on\n"
+          "glass_cabin, not faster); 0: the windows of\n"
+          "sections 2-13 (0)" }),
         parameter({ Kind::Whole, "--box-radius", "box-radius", FIELD(job.filter.box_radius), "R",
           "With --core 1: the largest window half-size (64)" }),
         always_written({ Kind::Whole, "--threads", "threads", FIELD(job.threads), "N",
