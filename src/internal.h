@@ -33,7 +33,7 @@ constexpr int kFilterTile    = 1024;
 constexpr int kSelectionTile = 2048;
 /// The box core's tiles (box_core.cpp): its radii up to 4 hold 50 planes
 /// of doubles over the tile and its pool and windows around it.
-constexpr int kBoxTile = 512;
+constexpr int kBoxTile = 384;
 
 /// Parallel options that split a range of any length over the threads
 /// (nthreads 0: all). OIIO's default paropt runs a range of fewer than

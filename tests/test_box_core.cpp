@@ -120,7 +120,7 @@ TEST(BoxCore, MatchesThePlainReference)
 
 TEST(BoxCore, SameBitsForAnyThreadsTilesRoiAndStrip)
 {
-    // Wider than the core's 512-pixel tile, so the frame is two tiles.
+    // Wider than the core's 384-pixel tile, so the frame is two tiles.
     const int w = 512 + 44, h = 40;
     Scene s = synth::shadow_edge(w, h, { 8, 11 });
     synth::vary_guides(s, true);
