@@ -142,6 +142,12 @@ LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
     // The value term's noise scale from the same byte's top bits (a byte
     // of its own would shift the corpus's inputs).
     opt.value_noise = (large >> 6) % 3;
+    // The box core from bits 1-4 of the same byte: radii up to 8 (0 is
+    // refused).
+    if ((large >> 1) & 1) {
+        opt.core       = 1;
+        opt.box_radius = (large >> 2) % 9;
+    }
 
     const int nchannels = 3 + shape % 3;  // RGB, + alpha, + an AOV
     ImageBuf radiance   = image(bytes, w, h, nchannels);
