@@ -4,7 +4,7 @@
 // Box sums whose cost per pixel does not depend on the radius, and whose
 // every sum is added in an order fixed by the frame, not by the region
 // held (box_sums.cpp): the box core's (docs/FILTER.md section 15) normal
-// equations, splats and risk smoothing all go through box_sum_planes().
+// equations, splats and the choice's noise all go through box_sum_planes().
 
 #pragma once
 
