@@ -278,6 +278,10 @@ TEST_F(StreamTest, StripsOfTiledFilesOffsetWindowsAndLayersAreExact)
         { "guide file",
           " --mode beauty --normal:ch=\"Denoising Normal\" " + path("guides.exr"), "50", "72" },
         { "today's filter", " --mode beauty --select 0", "1", "28" },
+        // The box core (docs/FILTER.md section 15): radius 8 on cells of 2
+        // reaches 20, the choice 7, the noise 6, the correction 7 (40), and
+        // path mode's own reach as above (26).
+        { "box core, path", " --core 1 --box-radius 8", "5", "66" },
     };
     for (const Case& c : cases) {
         SCOPED_TRACE(c.name);
