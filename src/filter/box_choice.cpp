@@ -13,6 +13,7 @@
 #include "box_choice.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -51,6 +52,9 @@ constexpr double kBlendTemperature = 0.3;
 
 /// The relative-error floor of relMSE (zmetrics' 0.01 on the radiance).
 constexpr double kRelFloor = 1e-2;
+
+/// The input and radii 1, 2, 4, ... up to box_radius's largest, 128.
+constexpr int kMostCandidates = 9;
 
 double
 luma(const float* rgb)
@@ -144,7 +148,8 @@ blend_pixel(const std::vector<BoxCandidate>& cands, const Planes<double>& t,
     const int nc = int(cands.size());
     const size_t p = at(rr, x, y);
     const double gp = t.plane(nc + 1)[p], vp = t.plane(nc + 2)[p];
-    std::vector<double> pooled(size_t(nc) + 1, 0.0);
+    // At most the input and radii 1, 2, 4, ... 128, and the reference's own.
+    std::array<double, kMostCandidates + 1> pooled {};
     for (int v = std::max(y - kPoolRadius, rr.ybegin); v <= std::min(y + kPoolRadius, rr.yend - 1); ++v)
         for (int u = std::max(x - kPoolRadius, rr.xbegin); u <= std::min(x + kPoolRadius, rr.xend - 1); ++u) {
             const size_t q = at(rr, u, v);
@@ -155,7 +160,7 @@ blend_pixel(const std::vector<BoxCandidate>& cands, const Planes<double>& t,
                 pooled[size_t(c)] += w * t.plane(c)[q];
         }
     double least = std::numeric_limits<double>::infinity();
-    std::vector<char> reaches(size_t(nc), 0);
+    std::array<bool, kMostCandidates> reaches {};
     for (int c = 0; c < nc; ++c) {
         const float* rgb = &cands[size_t(c)].rgb[3 * p];
         reaches[size_t(c)] = std::isfinite(rgb[0]) && std::isfinite(rgb[1])
@@ -191,6 +196,8 @@ blend_candidates(const FilterInputs& in, const std::vector<BoxCandidate>& cands,
                  std::vector<double>& wsum, std::vector<float>& radius,
                  int nthreads)
 {
+    if (cands.size() > size_t(kMostCandidates) || cands.size() <= size_t(kReference))
+        return;  // box_radius is checked to 1..128: 2 to 9 candidates
     const std::vector<double> v = local_variance(in, cands[kReference], rr, nthreads);
     const Planes<double> t = risk_terms(in, cands, guide, rr, v, nthreads);
     for_rows(roi, nthreads, [&](int y) {
