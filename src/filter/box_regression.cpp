@@ -61,13 +61,6 @@ pair_index(int j, int k)
 /// A cell's windows and splats reach this many cells on each side.
 constexpr int kCellWindow = 4;
 
-/// floor(a / b) for b > 0.
-int
-floor_div(int a, int b)
-{
-    return a >= 0 ? a / b : -((-a + b - 1) / b);
-}
-
 /// Pixel (x, y)'s features; false if it takes no part in fits.
 bool
 features(const FilterInputs& in, int x, int y, double f[kFeatures])

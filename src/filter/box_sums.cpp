@@ -19,13 +19,6 @@ namespace detail {
 
 namespace {
 
-/// floor(a / b) for b > 0.
-inline int
-floor_div(int a, int b)
-{
-    return a >= 0 ? a / b : -((-a + b - 1) / b);
-}
-
 /// Columns of one task of the vertical pass: enough to run in lanes.
 constexpr int kColumnChunk = 64;
 

@@ -15,6 +15,14 @@
 namespace zdenoise {
 namespace detail {
 
+/// floor(a / b) for b > 0: the block or cell, anchored at the frame's
+/// origin, that frame coordinate a lies in.
+inline int
+floor_div(int a, int b)
+{
+    return a >= 0 ? a / b : -((-a + b - 1) / b);
+}
+
 /// Planes of T over one region, plane after plane, `width` x `height`
 /// each, row-major.
 template<class T>

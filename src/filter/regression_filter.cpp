@@ -106,9 +106,10 @@ check_options(ImageBuf& dst, const FilterOptions& o)
 
 namespace {
 
-/// Filter the output pixels `roi` (sections 2-7), reading the inputs over
-/// roi plus the halo everything depends on. `opt.frame` is the image's data
-/// window. `hat`, if not null, receives the hat diagonal. The statistics
+/// Filter the output pixels `roi` (sections 2-7, or with core 1 the box
+/// core of section 15), reading the inputs over roi plus the halo
+/// everything depends on. `opt.frame` is the image's data window. `hat`,
+/// if not null, receives the hat diagonal (core 0). The statistics
 /// count the windows and pixels in `counted`.
 bool
 filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
@@ -119,24 +120,10 @@ filter_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
     FilterInputs in;
     return decode_filter_inputs(in, dst, quotient, albedo, guides, opt, region,
                                 nthreads)
-           && filter_decoded(dst, quotient, in, opt, roi, counted, nthreads,
-                             totals, hat);
-}
-
-
-/// The box core over roi (box_core.cpp), decoding the inputs over roi
-/// and its halo.
-bool
-box_tile(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
-         const Guides& guides, const FilterOptions& opt, ROI roi,
-         const ROI& counted, int nthreads, FilterStats& totals)
-{
-    const ROI region = halo_region(roi, opt.frame, filter_halo(opt));
-    FilterInputs in;
-    return decode_filter_inputs(in, dst, quotient, albedo, guides, opt, region,
-                                nthreads)
-           && box_filter_decoded(dst, quotient, in, opt, roi, counted, nthreads,
-                                 totals);
+           && (opt.core ? box_filter_decoded(dst, quotient, in, opt, roi,
+                                             counted, nthreads, totals)
+                        : filter_decoded(dst, quotient, in, opt, roi, counted,
+                                         nthreads, totals, hat));
 }
 
 
@@ -168,10 +155,7 @@ filter_tiles(ImageBuf& dst, const ImageBuf& quotient, const ImageBuf& albedo,
                 progress((float(t) + f) / float(ntiles));
             };
         const bool done
-            = tile_opt.core
-                  ? box_tile(dst, quotient, albedo, guides, tile_opt, tile,
-                             tile_counted, nthreads, totals)
-              : tile_opt.select
+            = tile_opt.select && !tile_opt.core
                   ? selected_regression_filter(dst, quotient, albedo, guides,
                                                tile_opt, tile, tile_counted,
                                                nthreads, totals)
